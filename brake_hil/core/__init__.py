@@ -1,0 +1,1 @@
+"""ROS-free core: physics, signals, identification and diagnosis (numpy/scipy only)."""

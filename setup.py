@@ -1,0 +1,54 @@
+"""brake_hil: ament_python package, also pip-installable into a plain venv."""
+
+from glob import glob
+
+from setuptools import find_packages, setup
+
+package_name = "brake_hil"
+
+ROS_WHEELS = [  # PyPI wheels of ROS 2 Kilted, for users without a ROS install
+    "ros-kilted-rclpy",
+    "ros-kilted-rmw-fastrtps-cpp",
+    "ros-kilted-std-msgs",
+    "ros-kilted-sensor-msgs",
+    "ros-kilted-geometry-msgs",
+    "ros-kilted-diagnostic-msgs",
+]
+
+setup(
+    name=package_name,
+    version="0.1.0",
+    packages=find_packages(exclude=["test", "test.*"]),
+    data_files=[
+        ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
+        ("share/" + package_name, ["package.xml"]),
+        ("share/" + package_name + "/config", glob("config/*")),
+    ],
+    install_requires=[
+        "setuptools",
+        "numpy>=1.24",
+        "scipy>=1.10",
+        "PyYAML>=6",
+        "mcap>=1.1",
+        "mcap-ros2-support>=0.5",
+        "rosbags>=0.10",
+        "python-can>=4.3",
+        "cantools>=39",
+        "matplotlib>=3.7",
+        "tqdm>=4.60",
+    ],
+    extras_require={
+        "ros": ROS_WHEELS,
+        "dev": ["pytest>=7", "ruff>=0.5", "mypy>=1.8", "types-PyYAML"],
+    },
+    zip_safe=True,
+    maintainer="brake_hil developers",
+    maintainer_email="brake-hil@example.com",
+    description="ROS 2 node suite for hardware-in-the-loop testing of hydraulic disk brakes",
+    license="Apache-2.0",
+    entry_points={
+        "console_scripts": [
+            "brake-hil = brake_hil.cli:main",
+        ],
+    },
+)
