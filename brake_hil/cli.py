@@ -1,0 +1,160 @@
+"""``brake-hil``: the command line of interface.md.
+
+``main()`` only parses; each sub-command is a function that does the work. Bad input (a
+missing file, a corrupt bag, a missing topic, NaN samples, stamps going backwards, a bad rig
+key) ends with one line on stderr naming the file and the problem, and exit status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from brake_hil.core.characterization import characterize
+from brake_hil.core.comparison import compare
+from brake_hil.core.excitation import pulsing_profile
+from brake_hil.core.measurement import SENSORS, measure
+from brake_hil.core.parameters import derive_parameters
+from brake_hil.core.rig import load_rig
+from brake_hil.core.comparison import predict
+from brake_hil.errors import BrakeHilError
+from brake_hil.io.recording_reader import read_recording
+from brake_hil.io.recording_writer import write_recording
+from brake_hil.topics import (
+    BLOCK_FORCE,
+    BORE_PRESSURE,
+    CALIPER_DISPLACEMENT,
+    MASTER_CYLINDER_PRESSURE,
+    MEASURED_OUTPUTS,
+)
+
+EXIT_BAD_INPUT = 2
+
+
+def run_compare(recording_path: Path, rig_path: Path, json_path: Path | None,
+                plot_path: Path | None) -> dict[str, object]:
+    """``brake-hil compare``: the rig file's model against the recording (Tables 4-5)."""
+    rig = load_rig(rig_path)
+    recording = read_recording(recording_path, required=(MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS))
+    comparison = compare(recording, rig)
+    result = {"recording": str(recording_path), "rig": str(rig_path), **comparison.as_dict()}
+    print(f"recording {recording_path}  rig {rig_path} ({rig.name})")
+    for segment in comparison.segments:
+        print(
+            f"segment {segment.t_start:6.2f}-{segment.t_end:6.2f} s, "
+            f"mean p_i {segment.mean_pressure / 1e6:.2f} MPa"
+        )
+    print(f"{'channel':8s}{'ptp ratio %':>13s}{'tau/T %':>10s}{'NRMSE':>9s}{'cycles':>8s}")
+    for channel, m in comparison.metrics().items():
+        print(
+            f"{channel:8s}{m['ptp_ratio_pct']:13.1f}{m['tau_over_T_pct']:10.2f}"
+            f"{m['nrmse']:9.4f}{int(m['cycles']):8d}"
+        )
+    if plot_path is not None:
+        from brake_hil.report.plots import plot_comparison
+
+        plot_comparison(comparison, plot_path, f"{recording_path.name}: {rig.name}")
+        print(f"plot written to {plot_path}")
+    _write_json(json_path, result)
+    return result
+
+
+def run_characterize(recording_path: Path, rig_path: Path,
+                     json_path: Path | None) -> dict[str, object]:
+    """``brake-hil characterize``: the seed's Table 3 (and Table 1) per steady segment."""
+    rig = load_rig(rig_path)
+    recording = read_recording(recording_path, required=(MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS))
+    segments = characterize(recording, rig)
+    result = {"recording": str(recording_path), "segments": [s.as_dict() for s in segments]}
+    header = (f"{'segment s':>13s}{'max p MPa':>10s}{'k_eh*':>7s}{'eta_eh':>7s}"
+              f"{'2c_fs*':>7s}{'2c_ss*':>7s}{'2c_fb*':>7s}{'xi':>6s}  slips")
+    print(f"recording {recording_path}  rig {rig_path} ({rig.name})")
+    print(header)
+    for s in segments:
+        print(
+            f"{s.t_start:6.2f}-{s.t_end:6.2f}{s.max_pressure / 1e6:10.2f}{s.k_eh_star:7.3f}"
+            f"{s.eta_eh:7.3f}{s.two_c_fs_star:7.3f}{s.two_c_ss_star:7.3f}{s.two_c_fb_star:7.3f}"
+            f"{s.xi:6.2f}  {'yes' if s.seal_slips else 'no'}"
+        )
+    _write_json(json_path, result)
+    return result
+
+
+def run_simulate(rig_path: Path, out: Path, max_pressures: Sequence[float], pulsing_s: float,
+                 seed: int) -> Path:
+    """``brake-hil simulate``: an LTI-model recording with the DAQ's noise and quantisation."""
+    rig = load_rig(rig_path)
+    if out.exists():
+        raise BrakeHilError(f"{out}: already exists; choose a new output directory")
+    time, pressure = pulsing_profile(max_pressures, pulsing_s=pulsing_s,
+                                     pulsing_hz=rig.excitation_hz)
+    params = derive_parameters(rig, float(np.mean(pressure[time > 1.0])))
+    outputs = predict(pressure, params)
+    rng = np.random.default_rng(seed)
+    channels = {
+        MASTER_CYLINDER_PRESSURE: measure(pressure, SENSORS["p_i"], rng),
+        BORE_PRESSURE: measure(outputs["p_b"], SENSORS["p_b"], rng),
+        BLOCK_FORCE: measure(outputs["F_k"], SENSORS["F_k"], rng),
+        CALIPER_DISPLACEMENT: measure(outputs["x_c"], SENSORS["x_c"], rng),
+    }
+    write_recording(out, time, channels)
+    print(f"wrote {out} ({time.size} samples, {time[-1]:.1f} s)")
+    return out
+
+
+def _write_json(path: Path | None, result: dict[str, object]) -> None:
+    if path is None:
+        return
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(result, indent=2) + "\n", encoding="utf-8")
+    print(f"json written to {path}")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of ``brake-hil``."""
+    parser = argparse.ArgumentParser(
+        prog="brake-hil", description="Hardware-in-the-loop tools for hydraulic disk brakes."
+    )
+    commands = parser.add_subparsers(dest="command", required=True)
+    cmp = commands.add_parser("compare", help="run the rig's LTI model on a recording")
+    cmp.add_argument("recording", type=Path)
+    cmp.add_argument("--rig", type=Path, required=True)
+    cmp.add_argument("--json", type=Path)
+    cmp.add_argument("--plot", type=Path, help="PNG of measured vs predicted")
+    chz = commands.add_parser("characterize", help="the seed's Table 3 from a recording")
+    chz.add_argument("recording", type=Path)
+    chz.add_argument("--rig", type=Path, required=True)
+    chz.add_argument("--json", type=Path)
+    sim = commands.add_parser("simulate", help="write a recording of the LTI model")
+    sim.add_argument("--rig", type=Path, required=True, help="the rig to simulate (truth)")
+    sim.add_argument("--out", type=Path, required=True, help="new rosbag2 directory")
+    sim.add_argument("--max-pressure", type=float, nargs="+", default=[1.38e6],
+                     help="maximum master-cylinder pressures, Pa (one segment each)")
+    sim.add_argument("--pulsing-seconds", type=float, default=5.0)
+    sim.add_argument("--seed", type=int, default=0)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``brake-hil`` console script."""
+    args = build_parser().parse_args(argv)
+    try:
+        if args.command == "compare":
+            run_compare(args.recording, args.rig, args.json, args.plot)
+        elif args.command == "characterize":
+            run_characterize(args.recording, args.rig, args.json)
+        elif args.command == "simulate":
+            run_simulate(args.rig, args.out, args.max_pressure, args.pulsing_seconds, args.seed)
+    except BrakeHilError as err:
+        print(f"brake-hil {args.command}: error: {err}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

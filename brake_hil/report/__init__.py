@@ -1,0 +1,1 @@
+"""Reports for people: plots of measured against predicted, residuals, hysteresis loops."""
