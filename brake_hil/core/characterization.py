@@ -1,19 +1,24 @@
 """Characterisation of the seal from a recording: the seed's Table 3 (eqs. 1, 3-11).
 
 For each steady 5 Hz segment the measured signals are low-passed (30 Hz, the seed's
-conditioning), then band-passed 4-6 Hz so that only the fundamental remains (seed, eq. 1).
+conditioning); the seed then band-passes 4-6 Hz so that only the fundamental remains
+(eq. 1). Here the fundamental is taken as its phasor, a least-squares fit over the segment's
+whole cycles (:func:`signals.harmonic_phasor`): the narrow-band limit of that band-pass,
+without the filter's transients at the segment's ends, which bias a loop integral by a few
+per cent on a 4 s segment.
 
 Conventions (physics.md asks to state them):
 
 * Seal displacement ``x_s = x_p - x_c = F_k / k_k - x_c`` (seed); seal force from the piston
   balance, eq. 21e: ``F_s = A_ep p_b - F_k - M_p x_p''``. Both seals together.
 * ``k_eh`` is the secant stiffness of the seal loop at the displacement turning points, i.e.
-  the in-phase part of ``F_s`` over ``x_s`` on the band-passed loop; for a Jenkins element
+  the in-phase part of ``F_s`` over ``x_s`` at the fundamental, ``Re(F_s / X_s)``; for a Jenkins element
   it is the peak force over the peak displacement, for the LTI model it is exactly ``k_eh``.
   The printed eq. 4, ``k_eh = F_fs / X_s`` with the *theoretical* ``F_fs``, is reported too
   as ``k_eh_eq4``.
 * ``c_eh`` is the dissipated energy of the seal loop over ``pi w_e X_s^2`` (eq. 1 applied to
-  the seal's own force and displacement, exact for the LTI model). The seed's literal eq. 1
+  the seal's own force and displacement, exact for the LTI model); at the fundamental the
+  loop's area is ``pi Im(F_s conj(X_s))``, so ``c_eh = Im(F_s / X_s) / w_e``. The seed's literal eq. 1
   on ``F_k`` against ``x_c`` is reported as ``c_eh_eq1``.
 * ``c_fs`` (eq. 5, Jenkins loop ``dU_s = 4 F_fs (X_s - c_s)``), ``c_ss`` (eq. 6, scaled by the
   sticking share ``min(1, c_s / 2 X_s)``) and ``c_fb`` (eqs. 8-9) are per seal / per bore;
@@ -102,13 +107,8 @@ def characterize(recording: Recording, rig: Rig) -> list[SegmentCharacterization
         if value is not None
     }
     filtered["p_i"] = input_filtered
-    band = {
-        key: signals.bandpass(value, rate, low_hz=rig.excitation_hz - 1.0,
-                              high_hz=rig.excitation_hz + 1.0)
-        for key, value in filtered.items()
-    }
     return [
-        _characterize_segment(recording.time, filtered, band, rig, start, end)
+        _characterize_segment(recording.time, filtered, rig, start, end)
         for start, end in segments
     ]
 
@@ -116,31 +116,33 @@ def characterize(recording: Recording, rig: Rig) -> list[SegmentCharacterization
 def _characterize_segment(
     time: FloatArray,
     filtered: dict[str, FloatArray],
-    band: dict[str, FloatArray],
     rig: Rig,
     start: float,
     end: float,
 ) -> SegmentCharacterization:
-    window = (time >= start) & (time < end)
+    window = signals.segment_slice(time, start, end)
+    t = time[window]
     rate = 1.0 / float(np.median(np.diff(time)))
     omega = excitation_angular_frequency(rig)
     seal = seal_properties(rig)
     area_ep = piston_area(rig)
-    cycles = max((end - start) * rig.excitation_hz, 1.0)
 
-    piston_displacement = band["F_k"] / rig.block_stiffness
-    piston_acceleration = np.gradient(np.gradient(piston_displacement, time), time)
-    seal_displacement = piston_displacement - band["x_c"]
-    seal_force = area_ep * band["p_b"] - band["F_k"] - rig.piston_mass * piston_acceleration
+    def phasor(key: str) -> complex:
+        return signals.harmonic_phasor(filtered[key][window], t, rig.excitation_hz)
 
-    x_s, f_s = seal_displacement[window], seal_force[window]
-    amplitude = math.sqrt(2.0 * float(np.mean(x_s**2)))  # X_s of the fundamental
-    k_eh = float(np.mean(f_s * x_s) / np.mean(x_s**2))
-    c_eh = loop_area(x_s, f_s) / cycles / (math.pi * omega * amplitude**2)
-
-    x_c, f_k = band["x_c"][window], band["F_k"][window]
-    amplitude_c = math.sqrt(2.0 * float(np.mean(x_c**2)))
-    c_eh_eq1 = abs(loop_area(x_c, f_k)) / cycles / (math.pi * omega * amplitude_c**2)
+    bore_phasor, force_phasor, caliper_phasor = phasor("p_b"), phasor("F_k"), phasor("x_c")
+    piston_phasor = force_phasor / rig.block_stiffness  # x_p = F_k / k_k
+    seal_displacement = piston_phasor - caliper_phasor  # X_s
+    seal_force = (  # eq. 21e: F_s = A_ep p_b - F_k - M_p x_p''
+        area_ep * bore_phasor - force_phasor + rig.piston_mass * omega**2 * piston_phasor
+    )
+    seal_impedance = seal_force / seal_displacement  # k_eh + j w_e c_eh
+    amplitude = abs(seal_displacement)
+    k_eh = seal_impedance.real
+    c_eh = seal_impedance.imag / omega
+    c_eh_eq1 = abs((force_phasor * caliper_phasor.conjugate()).imag) / (
+        omega * abs(caliper_phasor) ** 2
+    )
 
     c_fs = jenkins_loop_area(seal.friction_threshold, seal.slip_threshold, amplitude) / (
         math.pi * omega * amplitude**2

@@ -174,7 +174,7 @@ def discretize(system: StateSpace, sample_time: float = SAMPLE_TIME) -> Discrete
     transition = exponential[:n, :n]
     gamma_1 = exponential[:n, n]
     gamma_2 = exponential[:n, n + 1]
-    equilibrium_gain = -np.linalg.solve(A, B)
+    equilibrium_gain = _equilibrium_gain(A, B)
     return DiscreteModel(
         transition=transition,
         input_previous=gamma_1 - gamma_2,
@@ -184,6 +184,24 @@ def discretize(system: StateSpace, sample_time: float = SAMPLE_TIME) -> Discrete
         sample_time=sample_time,
         output_names=system.output_names,
     )
+
+
+def _equilibrium_gain(A: FloatArray, B: FloatArray) -> FloatArray:
+    """Steady state per unit input, ``A x = -B``.
+
+    With the air-pressure input the hydraulic circuit is closed: the fluid volume
+    ``C_i p_i + C_b p_b + A_ep (x_p - x_c) - A_i x_i`` is conserved, so ``A`` is singular.
+    The equilibrium is then the one that keeps that conserved quantity at its value in the
+    unloaded state (zero), i.e. the least-squares solution orthogonal to the null space.
+    """
+    singular_values = np.linalg.svd(A, compute_uv=False)
+    if singular_values[-1] > 1e-12 * singular_values[0]:
+        return np.asarray(-np.linalg.solve(A, B))
+    conserved = np.linalg.svd(A.T)[2][-1]  # left null vector: the conserved combination
+    system = np.vstack([A, conserved])
+    target = np.concatenate([-B, [0.0]])
+    solution, *_ = np.linalg.lstsq(system, target, rcond=None)
+    return np.asarray(solution)
 
 
 class ModelOutput(NamedTuple):

@@ -88,7 +88,7 @@ MASTER_CYLINDER_SCHEMA: dict[str, Bound] = {
 }
 DEFAULT_MASTER_CYLINDER: dict[str, float] = {
     "diameter": 0.01905,  # 3/4 in, a common master cylinder bore
-    "length": 0.030,
+    "length": 0.080,  # fluid column ahead of the primary piston
     "mass": 0.5,
     "spring_stiffness": 5.0e3,
     "air_piston_diameter": 0.050,

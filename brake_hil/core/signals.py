@@ -286,6 +286,26 @@ def harmonic_energy_shares(
 # --------------------------------------------------------------------------- cycles
 
 
+def harmonic_phasor(
+    signal: npt.ArrayLike, time_s: npt.ArrayLike, frequency_hz: float
+) -> complex:
+    """Complex amplitude ``X`` of the ``frequency_hz`` component: ``x(t) ~ Re(X e^{jwt})``.
+
+    Least-squares fit of ``offset + drift t + a cos(wt) + b sin(wt)`` over the samples
+    (pass whole cycles), ``X = a - j b``. It is what the seed's 4-6 Hz band-pass isolates,
+    in the limit of a narrow band, without the filter's transients at the segment's ends.
+    """
+    values, time = _as_same_length({"signal": signal, "time_s": time_s})
+    time = _as_time(time)
+    _check_positive(frequency_hz, "frequency_hz")
+    phase = 2.0 * np.pi * frequency_hz * time
+    centred = time - time.mean()
+    basis = np.column_stack([np.ones_like(time), centred, np.cos(phase), np.sin(phase)])
+    coefficients, *_ = np.linalg.lstsq(basis, values, rcond=None)
+    return complex(coefficients[2], -coefficients[3])
+
+
+
 def whole_cycles(
     start_s: float, end_s: float, period_s: float = EXCITATION_PERIOD_S
 ) -> tuple[float, float]:
@@ -299,10 +319,7 @@ def whole_cycles(
     _check_positive(period_s, "period_s")
     cycles = math.floor((end_s - start_s) / period_s + 1e-9)
     if cycles < 1:
-        msg = (
-            f"Interval {start_s:.6g}-{end_s:.6g} s is shorter than one period of "
-            f"{period_s} s."
-        )
+        msg = f"Interval {start_s:.6g}-{end_s:.6g} s is shorter than one period of {period_s} s."
         raise SignalError(msg)
     return start_s, start_s + cycles * period_s
 
@@ -416,7 +433,13 @@ def _mean_crossings(
         local_value = centred[first : last + 1]
         time_dev = local_time - local_time.mean()
         slope = float(np.dot(time_dev, local_value) / np.dot(time_dev, time_dev))
-        zero = local_time.mean() - local_value.mean() / slope
+        if slope == 0.0:  # a pathological noisy edge: take its middle
+            zero = float(local_time.mean())
+        else:  # within the edge's samples
+            zero = min(
+                max(float(local_time.mean()) - float(local_value.mean()) / slope, 0.0),
+                float(local_time[-1]),
+            )
         (rising if levels[switch + 1] > 0 else falling).append(float(time[first] + zero))
     return np.asarray(falling, dtype=np.float64), np.asarray(rising, dtype=np.float64)
 

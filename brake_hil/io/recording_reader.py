@@ -78,6 +78,10 @@ def _fail(path: Path, problem: str) -> RecordingError:
     return RecordingError(f"{path}: {problem}")
 
 
+def _count(number: int, noun: str) -> str:
+    return f"{number} {noun}{'' if number == 1 else 's'}"
+
+
 def _one_line(err: BaseException) -> str:
     text = " ".join(str(err).split()) or type(err).__name__
     return text.rstrip(".")
@@ -110,7 +114,9 @@ def _open(path: Path) -> Reader:
 
 
 def _unreadable(path: Path, err: Exception) -> RecordingError:
-    return _fail(path, f"cannot read the recording (truncated or corrupt?): {_one_line(err)}")
+    if isinstance(err, OSError):
+        return _fail(path, f"cannot read the recording: {_one_line(err)}")
+    return _fail(path, f"unreadable recording (truncated or corrupt?): {_one_line(err)}")
 
 
 def _summaries(reader: Reader) -> list[TopicSummary]:
@@ -138,8 +144,7 @@ def _describe(topics: Sequence[TopicSummary]) -> str:
     if not topics:
         return "no topics"
     return ", ".join(
-        f"{t.name} ({t.msgtype}, {t.message_count} message{'' if t.message_count == 1 else 's'})"
-        for t in topics
+        f"{t.name} ({t.msgtype}, {_count(t.message_count, 'message')})" for t in topics
     )
 
 
@@ -170,7 +175,7 @@ def _select(
 def _raw_messages(
     path: Path, reader: Reader, selected: Mapping[TopicSpec, list[Connection]]
 ) -> dict[TopicSpec, list[bytes]]:
-    """Serialised messages of each selected topic, in log-time order."""
+    """Serialised messages of each selected topic, in log-time order, all that are declared."""
     raw: dict[str, list[bytes]] = {spec.name: [] for spec in selected}
     connections = [conn for conns in selected.values() for conn in conns]
     try:
@@ -178,6 +183,14 @@ def _raw_messages(
             raw[conn.topic].append(data)
     except Exception as err:  # a corrupt chunk surfaces only while iterating
         raise _unreadable(path, err) from err
+    for spec, conns in selected.items():
+        declared, found = sum(c.msgcount for c in conns), len(raw[spec.name])
+        if found != declared:
+            problem = (
+                f"topic {spec.name}: the file declares {declared} messages but {found} could "
+                "be read (truncated or corrupt?)"
+            )
+            raise _fail(path, problem)
     return {spec: raw[spec.name] for spec in selected}
 
 
@@ -188,10 +201,11 @@ def _decode(path: Path, spec: TopicSpec, messages: Sequence[bytes]) -> _Channel:
     except ValueError as err:
         raise _fail(path, f"topic {spec.name}: corrupt message: {_one_line(err)}") from err
     if stamps.size < 2:
-        raise _fail(path, f"topic {spec.name} has {stamps.size} samples, at least 2 are needed")
+        problem = f"topic {spec.name} has {_count(stamps.size, 'sample')}, at least 2 are needed"
+        raise _fail(path, problem)
     if (bad := np.flatnonzero(~np.isfinite(values))).size:
         problem = (
-            f"topic {spec.name} has {bad.size} NaN/inf samples of {values.size}, "
+            f"topic {spec.name} has {_count(bad.size, 'NaN/inf sample')} of {values.size}, "
             f"the first at sample {bad[0]} (stamp {stamps[bad[0]]} ns)"
         )
         raise _fail(path, problem)
@@ -200,14 +214,14 @@ def _decode(path: Path, spec: TopicSpec, messages: Sequence[bytes]) -> _Channel:
         i = int(back[0]) + 1
         problem = (
             f"stamps of topic {spec.name} go backwards at sample {i} of {stamps.size}: "
-            f"{stamps[i]} ns after {stamps[i - 1]} ns ({back.size} times in all)"
+            f"{stamps[i]} ns after {stamps[i - 1]} ns ({_count(back.size, 'time')} in all)"
         )
         raise _fail(path, problem)
     if (repeat := np.flatnonzero(steps == 0)).size:
         i = int(repeat[0]) + 1
         problem = (
             f"stamps of topic {spec.name} repeat at sample {i} of {stamps.size}: "
-            f"{stamps[i]} ns ({repeat.size} times in all)"
+            f"{stamps[i]} ns ({_count(repeat.size, 'time')} in all)"
         )
         raise _fail(path, problem)
     return _Channel(stamps, values)
@@ -235,7 +249,7 @@ def _align(target: IntArray, channel: _Channel) -> FloatArray:
     if stamps.shape == target.shape and np.array_equal(stamps, target):
         return values
     origin = target[0]
-    aligned = np.interp(
+    aligned: FloatArray = np.interp(
         (target - origin).astype(np.float64), (stamps - origin).astype(np.float64), values
     )
     index = np.minimum(np.searchsorted(stamps, target), stamps.size - 1)
@@ -286,7 +300,7 @@ def read_recording(
     target = base[keep]
     if target.size < 2:
         problem = (
-            f"the channels overlap over {target.size} samples of "
+            f"the channels overlap over {_count(target.size, 'sample')} of "
             f"{MASTER_CYLINDER_PRESSURE.name} ({first}..{last} ns), at least 2 are needed"
         )
         raise _fail(path, problem)

@@ -1,11 +1,14 @@
 """Write rig recordings as rosbag2 MCAP directories, as ``ros2 bag record -s mcap`` does.
 
-The directory holds ``metadata.yaml`` (rosbag2 version 9, the Kilted format) and one
-``.mcap`` file (profile ``ros2``, one ``ros2msg`` schema per type, CDR messages in
-zstd-compressed chunks as libmcap's default, chunk and message indexes, statistics), written by
-rosbags' rosbag2 ``Writer``. Messages are
-serialised in bulk by :mod:`brake_hil.io.stamped_cdr`. ``header.stamp`` is the sample time;
-the log time equals it unless given (a recorder logs the receive time).
+The directory holds ``metadata.yaml`` (rosbag2 version 9, the Kilted format), written by
+rosbags' rosbag2 ``Writer``, and one ``<name>_0.mcap``: profile ``ros2``, one ``ros2msg``
+schema per type, channels carrying ``offered_qos_profiles`` and ``topic_type_hash``, CDR
+messages in zstd-compressed chunks with CRCs (libmcap's defaults, so a corrupt chunk is
+detected on reading), indexes, statistics and the ``rosbag2`` metadata record. The ``.mcap``
+is written by the ``mcap`` package through rosbags' storage-plugin interface, because rosbags'
+own MCAP storage writes no CRCs. Messages are serialised in bulk by
+:mod:`brake_hil.io.stamped_cdr`; ``header.stamp`` is the sample time and the log time equals
+it unless given (a recorder logs the receive time).
 """
 
 from __future__ import annotations
@@ -13,15 +16,27 @@ from __future__ import annotations
 from collections.abc import Mapping
 from functools import lru_cache
 from pathlib import Path
+from types import MappingProxyType
 from typing import Final, NamedTuple
 
 import numpy as np
-from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability
-from rosbags.interfaces import QosTime
-from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
+from mcap.writer import CompressionType
+from mcap.writer import Writer as McapWriter
+from rosbags.interfaces import (
+    Connection,
+    MessageDefinitionFormat,
+    Qos,
+    QosDurability,
+    QosHistory,
+    QosLiveliness,
+    QosReliability,
+    QosTime,
+)
+from rosbags.rosbag2 import CompressionMode, StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.store import Typestore
 
+from brake_hil import __version__
 from brake_hil.core.recording import Recording
 from brake_hil.core.types import FloatArray
 from brake_hil.io.recording_reader import RECORDING_FIELDS
@@ -45,6 +60,58 @@ _DEFAULT_QOS: Final = Qos(  # rclcpp's default publisher QoS: reliable, volatile
     liveliness_lease_duration=_INFINITE,
     avoid_ros_namespace_conventions=False,
 )
+
+
+class _McapStorage:
+    """rosbags storage plugin that writes the ``.mcap`` with the ``mcap`` package."""
+
+    def __init__(self, path: Path, compression: CompressionMode) -> None:
+        del compression  # chunks are always zstd-compressed; the bag itself is not
+        self.path = path / f"{path.name}_0.mcap"
+        self._stream = self.path.open("xb")
+        self._mcap = McapWriter(self._stream, compression=CompressionType.ZSTD, enable_crcs=True)
+        self._mcap.start(profile="ros2", library=f"brake_hil {__version__}")
+        self._schema_ids: dict[str, int] = {}
+        self._channel_ids: dict[int, int] = {}
+
+    def add_msgtype(self, connection: Connection) -> None:
+        """Register the schema of ``connection``'s type."""
+        is_msg = connection.msgdef.format == MessageDefinitionFormat.MSG
+        self._schema_ids[connection.msgtype] = self._mcap.register_schema(
+            connection.msgtype, "ros2msg" if is_msg else "ros2idl", connection.msgdef.data.encode()
+        )
+
+    def add_connection(self, connection: Connection, offered_qos_profiles: str) -> None:
+        """Register a channel for ``connection``'s topic."""
+        self._channel_ids[connection.id] = self._mcap.register_channel(
+            connection.topic,
+            "cdr",
+            self._schema_ids[connection.msgtype],
+            {"offered_qos_profiles": offered_qos_profiles, "topic_type_hash": connection.digest},
+        )
+
+    def write(self, connection: Connection, timestamp: int, data: bytes | memoryview) -> None:
+        """Write one message; ``timestamp`` (ns) is its log and publish time."""
+        self._mcap.add_message(self._channel_ids[connection.id], timestamp, bytes(data), timestamp)
+
+    def close(self, version: int, metadata: str) -> None:
+        """Finish the file: the ``rosbag2`` metadata record, summary and footer."""
+        del version
+        self._mcap.add_metadata("rosbag2", {"serialized_metadata": metadata})
+        self._mcap.finish()  # type: ignore[no-untyped-call]
+        self._stream.close()
+
+    def abort(self) -> None:
+        """Close without a summary (the file is left truncated)."""
+        self._stream.close()
+
+
+class _Rosbag2Writer(Writer):
+    """rosbags' rosbag2 writer with :class:`_McapStorage` for MCAP."""
+
+    STORAGE_PLUGINS = MappingProxyType(
+        {**Writer.STORAGE_PLUGINS, StoragePlugin.MCAP: _McapStorage}
+    )
 
 
 class TopicSeries(NamedTuple):
@@ -114,13 +181,11 @@ def write_topics(
     order = np.argsort(all_log_times, kind="stable")
     offsets = np.cumsum([0, *(len(e) for e in encoded)])
     rows = np.arange(all_topics.size) - offsets[all_topics]
-    blobs = [memoryview(e.tobytes()) for e in encoded]
+    blobs = [e.tobytes() for e in encoded]
     sizes = [e.shape[1] for e in encoded]
 
     typestore = _typestore()
-    writer = Writer(path, version=9, storage_plugin=StoragePlugin.MCAP)
-    writer.set_compression(CompressionMode.STORAGE, CompressionFormat.ZSTD)  # chunks, as libmcap
-    with writer:
+    with _Rosbag2Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
         connections = [
             writer.add_connection(
                 spec.name, spec.msgtype, typestore=typestore, offered_qos_profiles=[_DEFAULT_QOS]

@@ -92,7 +92,7 @@ def encode_stamped(
         msg = "a stamp does not fit builtin_interfaces/msg/Time (int32 seconds)"
         raise ValueError(msg)
     frame = frame_id.encode() + b"\0"
-    body = int(_body_offset(np.int64(len(frame))))
+    body = 4 + (_HEADER_END + len(frame) + 7) // 8 * 8
     nfloats = len(FLOAT_FIELDS[msgtype])
     out = np.zeros((stamps.size, body + 8 * nfloats), dtype=np.uint8)
     out[:, 1] = 1  # CDR_LE
@@ -110,7 +110,7 @@ def _gather(
     buffer: ByteArray, offsets: npt.NDArray[np.int64], width: int, little: npt.NDArray[np.bool_]
 ) -> ByteArray:
     """``width`` bytes at each offset, in little-endian order, as an ``(n, width)`` array."""
-    raw = buffer[offsets[:, None] + np.arange(width)]
+    raw: ByteArray = buffer[offsets[:, None] + np.arange(width)]
     if not little.all():
         raw[~little] = raw[~little, ::-1]
     return raw

@@ -1,0 +1,22 @@
+"""Shared fixtures: the bundled rig files and the peer-data folder beside the checkout."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+from brake_hil.core.rig import Rig, load_rig
+
+PROJECT = Path(__file__).resolve().parents[1]
+CONFIG = PROJECT / "config"
+PEER_DATA = Path(os.environ.get("BRAKE_HIL_PEER_DATA", PROJECT.parent / "shared" / "peer-data"))
+
+os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+
+
+@pytest.fixture(scope="session")
+def default_rig() -> Rig:
+    """The nominal one-washer rig of physics.md."""
+    return load_rig(CONFIG / "rig_default.yaml")
