@@ -34,6 +34,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from brake_hil.core import signals
+from brake_hil.core.comparison import steady_windows
 from brake_hil.core.parameters import (
     excitation_angular_frequency,
     piston_area,
@@ -98,9 +99,8 @@ def characterize(recording: Recording, rig: Rig) -> list[SegmentCharacterization
             f"{recording.path}: characterisation needs measured {', '.join(missing)}"
         )
     rate = recording.sample_rate
-    period = 1.0 / rig.excitation_hz
     input_filtered = signals.lowpass(recording.master_cylinder_pressure, rate)
-    segments = signals.steady_segments(recording.time, input_filtered, rate, period_s=period)
+    segments = steady_windows(recording, input_filtered, rig)
     filtered = {
         key: signals.lowpass(np.asarray(value), rate)
         for key, value in recording.measured().items()

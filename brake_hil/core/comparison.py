@@ -19,7 +19,7 @@ from brake_hil.core.parameters import ModelParameters, derive_parameters
 from brake_hil.core.recording import Recording
 from brake_hil.core.rig import Rig
 from brake_hil.core.types import FloatArray
-from brake_hil.errors import RecordingError
+from brake_hil.errors import RecordingError, SignalError
 from brake_hil.topics import OUTPUT_CHANNELS
 
 SUMMARY_KEYS = ("ptp_ratio_pct", "tau_over_T_pct", "nrmse")
@@ -74,6 +74,18 @@ class Comparison:
         }
 
 
+def steady_windows(
+    recording: Recording, filtered_pressure: FloatArray, rig: Rig
+) -> list[tuple[float, float]]:
+    """Steady pulsing segments (s) of a recording; the error names the recording's file."""
+    try:
+        return signals.steady_segments(
+            recording.time, filtered_pressure, recording.sample_rate, 1.0 / rig.excitation_hz
+        )
+    except SignalError as err:
+        raise SignalError(f"{recording.path}: {err}") from err
+
+
 def predict(pressure: FloatArray, params: ModelParameters) -> dict[str, FloatArray]:
     """LTI-model outputs keyed ``p_b``, ``F_k``, ``x_c`` for a 1 kHz input ``pressure`` (Pa)."""
     outputs = simulate(discretize(caliper_state_space(params)), pressure)
@@ -108,7 +120,7 @@ def compare(
     filtered = conditioned_channels(recording)
     time = recording.time
     period = 1.0 / rig.excitation_hz
-    windows = signals.steady_segments(time, filtered["p_i"], recording.sample_rate, period)
+    windows = steady_windows(recording, filtered["p_i"], rig)
     predicted = {key: np.full(time.size, np.nan) for key in OUTPUT_CHANNELS}
     segments = []
     for start, end in windows:

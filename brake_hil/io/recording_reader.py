@@ -267,7 +267,8 @@ def read_recording(
         path: a rosbag2 directory (MCAP or sqlite3, one or more files), a ``.mcap`` or a
             ``.db3`` file.
         required: topics that must be present. ``p_i`` is always needed (it is the time
-            base); the other contract topics are read when present and are ``None`` otherwise.
+            base); the other contract topics are read when present and are ``None`` when
+            absent or without messages.
 
     Returns:
         The recording; ``time`` (s) counts from the first ``p_i`` sample of the span all
@@ -285,14 +286,19 @@ def read_recording(
     if unknown:
         msg = f"required topics {unknown} are not contract topics a Recording can hold"
         raise ValueError(msg)
+    needed = (MASTER_CYLINDER_PRESSURE, *required)
     reader = _open(path)
     try:
-        selected = _select(path, reader, (MASTER_CYLINDER_PRESSURE, *required))
+        selected = _select(path, reader, needed)
         raw = _raw_messages(path, reader, selected)
         topics = tuple(sorted(reader.topics))
     finally:
         reader.close()
-    channels = {spec: _decode(path, spec, messages) for spec, messages in raw.items()}
+    channels = {
+        spec: _decode(path, spec, messages)
+        for spec, messages in raw.items()
+        if messages or spec in needed  # an optional topic without messages counts as absent
+    }
 
     first, last = _common_span(path, channels)
     base = channels[MASTER_CYLINDER_PRESSURE].stamps_ns

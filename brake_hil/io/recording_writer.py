@@ -124,10 +124,12 @@ class TopicSeries(NamedTuple):
 
 @lru_cache(maxsize=1)
 def _typestore() -> Typestore:
+    """Kilted's message definitions, for the schemas and type hashes (loaded once)."""
     return get_typestore(Stores.ROS2_KILTED)
 
 
 def _checked(spec: TopicSpec, series: TopicSeries) -> tuple[IntArray, FloatArray, IntArray]:
+    """Stamps (ns), values and log times (ns) of ``series`` as 1-D arrays of one length."""
     stamps = np.asarray(series.stamps_ns, dtype=np.int64)
     values = np.asarray(series.values, dtype=np.float64)
     logged = stamps if series.log_times_ns is None else np.asarray(series.log_times_ns, np.int64)
@@ -178,9 +180,9 @@ def write_topics(
         topic_index.append(np.full(stamps.size, number, dtype=np.int64))
     all_log_times = np.concatenate(log_times) if specs else np.zeros(0, np.int64)
     all_topics = np.concatenate(topic_index) if specs else np.zeros(0, np.int64)
-    order = np.argsort(all_log_times, kind="stable")
+    order = np.argsort(all_log_times, kind="stable")  # messages in log-time order
     offsets = np.cumsum([0, *(len(e) for e in encoded)])
-    rows = np.arange(all_topics.size) - offsets[all_topics]
+    rows = np.arange(all_topics.size) - offsets[all_topics]  # message index within its topic
     blobs = [e.tobytes() for e in encoded]
     sizes = [e.shape[1] for e in encoded]
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -19,7 +20,15 @@ from brake_hil.topics import (
     TopicSpec,
 )
 
-PEER_DATA = Path(__file__).resolve().parents[2] / ".." / "shared" / "peer-data" / "rosbag2"
+PEER_DATA = (
+    Path(
+        os.environ.get(
+            "BRAKE_HIL_PEER_DATA",
+            Path(__file__).resolve().parents[2] / ".." / "shared" / "peer-data",
+        )
+    )
+    / "rosbag2"
+)
 """rosbag2's own test bags, in the ``shared`` folder beside the repository checkout."""
 
 

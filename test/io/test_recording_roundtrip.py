@@ -20,11 +20,14 @@ from brake_hil.io.recording_reader import list_topics, read_recording
 from brake_hil.io.recording_writer import (
     DEFAULT_FRAME_ID,
     DEFAULT_START_STAMP_NS,
+    TopicSeries,
     save_recording,
     write_recording,
+    write_topics,
 )
 from brake_hil.io.stamped_cdr import decode_stamped, encode_stamped
 from brake_hil.topics import (
+    AIR_PRESSURE,
     BLOCK_FORCE,
     BORE_PRESSURE,
     CALIPER_DISPLACEMENT,
@@ -101,8 +104,9 @@ def test_written_recording_reads_back_equal_with_read_recording(tmp_path: Path, 
     assert recording.sample_rate == pytest.approx(1000.0)
     assert recording.topics == tuple(sorted(spec.name for spec in channels))
     assert np.array_equal(recording.master_cylinder_pressure, channels[MASTER_CYLINDER_PRESSURE])
-    assert np.array_equal(recording.bore_pressure, channels[BORE_PRESSURE])  # type: ignore[arg-type]
-    assert np.array_equal(recording.block_force, channels[BLOCK_FORCE])  # type: ignore[arg-type]
+    assert recording.bore_pressure is not None and recording.block_force is not None
+    assert np.array_equal(recording.bore_pressure, channels[BORE_PRESSURE])
+    assert np.array_equal(recording.block_force, channels[BLOCK_FORCE])
     measured = recording.measured()["x_c"]
     assert measured is not None and np.array_equal(measured, channels[CALIPER_DISPLACEMENT])
     assert recording.predicted_bore_pressure is not None
@@ -122,7 +126,8 @@ def test_bare_mcap_copied_out_of_its_directory_reads_the_same(tmp_path: Path, ru
     assert from_file.topics == from_dir.topics
     assert from_file.start_stamp_ns == from_dir.start_stamp_ns
     assert np.array_equal(from_file.time, from_dir.time)
-    assert np.array_equal(from_file.block_force, from_dir.block_force)  # type: ignore[arg-type]
+    assert from_file.block_force is not None and from_dir.block_force is not None
+    assert np.array_equal(from_file.block_force, from_dir.block_force)
     assert list_topics(bare) == list_topics(bag)
 
 
@@ -182,7 +187,7 @@ def test_mcap_from_another_writer_with_other_frame_ids_and_skewed_stamps_reads(
                     "variance": 0.0,
                 }
                 writer.write_message(spec.name, schema, message, log_time=stamp + 123)
-        writer.finish()
+        writer.finish()  # type: ignore[no-untyped-call]
 
     recording = read_recording(path)
 
@@ -242,7 +247,8 @@ def test_sqlite3_bag_with_brake_topics_reads(tmp_path: Path, run: Run) -> None:
 
     recording = read_recording(bag, required=(MASTER_CYLINDER_PRESSURE, BLOCK_FORCE))
 
-    assert np.array_equal(recording.block_force, channels[BLOCK_FORCE])  # type: ignore[arg-type]
+    assert recording.block_force is not None
+    assert np.array_equal(recording.block_force, channels[BLOCK_FORCE])
     assert recording.bore_pressure is None
 
 
@@ -290,3 +296,20 @@ def test_an_18_s_1_khz_recording_of_seven_topics_writes_and_reads_in_well_under_
     assert recording.time.size == 18_000
     assert read - written < 2.0, f"read took {read - written:.2f} s"
     assert written - started < 3.0, f"write took {written - started:.2f} s"
+
+
+def test_an_optional_topic_without_messages_counts_as_absent(tmp_path: Path, run: Run) -> None:
+    time, channels = run
+    stamps = DEFAULT_START_STAMP_NS + np.round(time * 1e9).astype(np.int64)
+    bag = write_topics(
+        tmp_path / "with_empty_topic",
+        {
+            MASTER_CYLINDER_PRESSURE: TopicSeries(stamps, channels[MASTER_CYLINDER_PRESSURE]),
+            AIR_PRESSURE: TopicSeries(np.zeros(0, dtype=np.int64), np.zeros(0)),
+        },
+    )
+
+    recording = read_recording(bag)
+
+    assert AIR_PRESSURE.name in recording.topics
+    assert recording.air_pressure is None

@@ -1,0 +1,187 @@
+"""``brake-hil`` on the command line: results on good recordings, exit 2 on bad input."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from brake_hil.core.comparison import predict
+from brake_hil.core.excitation import pulsing_profile
+from brake_hil.core.parameters import derive_parameters
+from brake_hil.core.rig import Rig
+from brake_hil.io.recording_writer import write_recording
+from brake_hil.topics import (
+    BLOCK_FORCE,
+    BORE_PRESSURE,
+    CALIPER_DISPLACEMENT,
+    MASTER_CYLINDER_PRESSURE,
+)
+
+from test.conftest import CONFIG, PEER_DATA
+
+RIG = CONFIG / "rig_default.yaml"
+
+
+def brake_hil(*args: str | Path) -> subprocess.CompletedProcess[str]:
+    """Run the console entry point as a user would, in a fresh interpreter."""
+    return subprocess.run(
+        [sys.executable, "-m", "brake_hil.cli", *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+
+
+def _write(path: Path, rig: Rig, *, pressure_scale: float = 1.0, edit=None) -> Path:  # type: ignore[no-untyped-def]
+    time, pressure = pulsing_profile((1.38e6,), pulsing_s=4.0)
+    outputs = predict(pressure, derive_parameters(rig, 1.08e6))
+    channels = {
+        MASTER_CYLINDER_PRESSURE: pressure * pressure_scale,
+        BORE_PRESSURE: outputs["p_b"],
+        BLOCK_FORCE: outputs["F_k"],
+        CALIPER_DISPLACEMENT: outputs["x_c"],
+    }
+    if edit is not None:
+        edit(channels)
+    return write_recording(path, time, channels)
+
+
+@pytest.fixture(scope="module")
+def recording(tmp_path_factory: pytest.TempPathFactory, default_rig: Rig) -> Path:
+    return _write(tmp_path_factory.mktemp("rec") / "one_washer", default_rig)
+
+
+def test_compare_of_the_model_on_its_own_output_is_perfect(recording: Path, tmp_path: Path) -> None:
+    result = brake_hil("compare", recording, "--rig", RIG, "--json", tmp_path / "c.json",
+                       "--plot", tmp_path / "c.png")
+    assert result.returncode == 0, result.stderr
+    metrics = json.loads((tmp_path / "c.json").read_text())["metrics"]
+    assert set(metrics) == {"p_b", "F_k", "x_c"}
+    for channel in metrics.values():
+        assert channel["ptp_ratio_pct"] == pytest.approx(100.0, abs=0.5)
+        assert abs(channel["tau_over_T_pct"]) < 0.2
+        assert channel["nrmse"] < 0.005
+    assert (tmp_path / "c.png").stat().st_size > 10_000
+    assert "p_b" in result.stdout and "ptp ratio" in result.stdout
+
+
+def test_compare_sees_a_stiffer_caliper_in_x_c_but_not_in_p_b(
+    tmp_path: Path, default_rig: Rig
+) -> None:
+    stiffer = Rig(**{**default_rig.__dict__, "caliper_stiffness": 6.0e7})
+    bag = _write(tmp_path / "stiff", stiffer)
+    result = brake_hil("compare", bag, "--rig", RIG, "--json", tmp_path / "c.json")
+    assert result.returncode == 0, result.stderr
+    metrics = json.loads((tmp_path / "c.json").read_text())["metrics"]
+    assert metrics["x_c"]["ptp_ratio_pct"] > 120.0  # nominal caliper is softer: over-predicts
+    assert metrics["p_b"]["ptp_ratio_pct"] == pytest.approx(100.0, abs=3.0)
+
+
+def test_characterize_writes_table_3_per_segment(recording: Path, tmp_path: Path) -> None:
+    result = brake_hil("characterize", recording, "--rig", RIG, "--json", tmp_path / "t3.json")
+    assert result.returncode == 0, result.stderr
+    segments = json.loads((tmp_path / "t3.json").read_text())["segments"]
+    assert len(segments) == 1
+    segment = segments[0]
+    for key in ("t_start", "t_end", "max_pressure", "ptp_pressure", "k_eh", "c_eh", "k_eh_star",
+                "eta_eh", "c_fs", "c_ss", "c_fb", "xi"):
+        assert np.isfinite(segment[key]), key
+    assert segment["k_eh_star"] == pytest.approx(0.29, rel=0.01)
+    assert segment["eta_eh"] == pytest.approx(0.93, rel=0.01)
+
+
+def test_simulate_writes_a_recording_that_compare_reads(tmp_path: Path) -> None:
+    out = tmp_path / "sim"
+    assert brake_hil("simulate", "--rig", RIG, "--out", out, "--pulsing-seconds", "3").returncode == 0
+    assert (out / "metadata.yaml").exists()
+    again = brake_hil("simulate", "--rig", RIG, "--out", out)
+    assert again.returncode == 2 and "already exists" in again.stderr
+    assert brake_hil("compare", out, "--rig", RIG).returncode == 0
+
+
+def _single_error_line(result: subprocess.CompletedProcess[str]) -> str:
+    assert result.returncode == 2, (result.stdout, result.stderr)
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    assert "Traceback" not in result.stderr
+    return lines[0]
+
+
+def test_missing_recording_exits_2_naming_it(tmp_path: Path) -> None:
+    line = _single_error_line(brake_hil("compare", tmp_path / "nope", "--rig", RIG))
+    assert "nope" in line
+
+
+def test_truncated_bag_exits_2(recording: Path, tmp_path: Path) -> None:
+    broken = tmp_path / "broken"
+    shutil.copytree(recording, broken)
+    mcap = next(broken.glob("*.mcap"))
+    data = mcap.read_bytes()
+    mcap.write_bytes(data[: len(data) // 2])
+    line = _single_error_line(brake_hil("compare", broken, "--rig", RIG))
+    assert "broken" in line
+
+
+def test_missing_topic_exits_2_listing_what_is_there(tmp_path: Path, default_rig: Rig) -> None:
+    bag = _write(tmp_path / "no_force", default_rig, edit=lambda c: c.pop(BLOCK_FORCE))
+    line = _single_error_line(brake_hil("compare", bag, "--rig", RIG))
+    assert "/brake/block/force" in line and "/brake/bore/pressure" in line
+
+
+def test_nan_samples_exit_2(tmp_path: Path, default_rig: Rig) -> None:
+    def poison(channels):  # type: ignore[no-untyped-def]
+        channels[BORE_PRESSURE] = channels[BORE_PRESSURE].copy()
+        channels[BORE_PRESSURE][1234] = np.nan
+
+    bag = _write(tmp_path / "nan", default_rig, edit=poison)
+    line = _single_error_line(brake_hil("compare", bag, "--rig", RIG))
+    assert "nan" in line.lower() and "/brake/bore/pressure" in line
+
+
+def test_stamps_going_backwards_exit_2(tmp_path: Path, default_rig: Rig) -> None:
+    from brake_hil.io.recording_writer import TopicSeries, write_topics
+
+    time, pressure = pulsing_profile((1.38e6,), pulsing_s=2.0)
+    stamps = (1_700_000_000_000_000_000 + time * 1e9).astype(np.int64)
+    stamps[500], stamps[501] = stamps[501], stamps[500]
+    bag = write_topics(tmp_path / "backwards",
+                       {MASTER_CYLINDER_PRESSURE: TopicSeries(stamps, pressure)})
+    line = _single_error_line(brake_hil("compare", bag, "--rig", RIG))
+    assert "backwards" in line.lower() and "backwards" in line
+
+
+def test_bad_rig_key_exits_2_naming_the_key(recording: Path, tmp_path: Path) -> None:
+    rig = tmp_path / "bad_rig.yaml"
+    rig.write_text(RIG.read_text().replace("mass: 2.5", "mass: -2.5"))
+    line = _single_error_line(brake_hil("compare", recording, "--rig", rig))
+    assert "bad_rig.yaml" in line and "caliper.mass" in line
+
+
+def test_recording_without_steady_pulsing_exits_2(tmp_path: Path) -> None:
+    time = np.arange(0.0, 3.0, 1e-3)
+    ramp = 1e6 * time
+    bag = write_recording(tmp_path / "ramp", time, {
+        MASTER_CYLINDER_PRESSURE: ramp, BORE_PRESSURE: ramp, BLOCK_FORCE: ramp * 1e-3,
+        CALIPER_DISPLACEMENT: -ramp * 1e-11})
+    line = _single_error_line(brake_hil("compare", bag, "--rig", RIG))
+    assert "ramp" in line and "5 Hz" in line
+
+
+@pytest.mark.parametrize(
+    "bag",
+    ["mcap/talker", "mcap/wbag", "mcap/cdr_test", "mcap/bag_with_topics_and_service_events",
+     "sqlite3/talker", "sqlite3/wbag"],
+)
+def test_rosbag2s_own_bags_are_opened_and_the_brake_topics_named_missing(bag: str) -> None:
+    path = PEER_DATA / "rosbag2" / bag
+    if not path.exists():
+        pytest.skip(f"peer data not found at {path} (shared/ beside the checkout)")
+    line = _single_error_line(brake_hil("compare", path, "--rig", RIG))
+    assert "/brake/master_cylinder/pressure" in line
+    assert "the recording holds" in line
