@@ -8,20 +8,19 @@ key) ends with one line on stderr naming the file and the problem, and exit stat
 from __future__ import annotations
 
 import argparse
-import json
-import sys
 from collections.abc import Sequence
+import json
 from pathlib import Path
+import sys
 
 import numpy as np
 
 from brake_hil.core.characterization import characterize
-from brake_hil.core.comparison import compare
+from brake_hil.core.comparison import compare, predict
 from brake_hil.core.excitation import pulsing_profile
 from brake_hil.core.measurement import SENSORS, measure
 from brake_hil.core.parameters import derive_parameters
 from brake_hil.core.rig import load_rig
-from brake_hil.core.comparison import predict
 from brake_hil.errors import BrakeHilError
 from brake_hil.io.recording_reader import read_recording
 from brake_hil.io.recording_writer import write_recording
@@ -36,11 +35,14 @@ from brake_hil.topics import (
 EXIT_BAD_INPUT = 2
 
 
-def run_compare(recording_path: Path, rig_path: Path, json_path: Path | None,
-                plot_path: Path | None) -> dict[str, object]:
+def run_compare(
+    recording_path: Path, rig_path: Path, json_path: Path | None, plot_path: Path | None
+) -> dict[str, object]:
     """``brake-hil compare``: the rig file's model against the recording (Tables 4-5)."""
     rig = load_rig(rig_path)
-    recording = read_recording(recording_path, required=(MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS))
+    recording = read_recording(
+        recording_path, required=(MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS)
+    )
     comparison = compare(recording, rig)
     result = {"recording": str(recording_path), "rig": str(rig_path), **comparison.as_dict()}
     print(f"recording {recording_path}  rig {rig_path} ({rig.name})")
@@ -64,15 +66,23 @@ def run_compare(recording_path: Path, rig_path: Path, json_path: Path | None,
     return result
 
 
-def run_characterize(recording_path: Path, rig_path: Path,
-                     json_path: Path | None) -> dict[str, object]:
+def run_characterize(
+    recording_path: Path, rig_path: Path, json_path: Path | None
+) -> dict[str, object]:
     """``brake-hil characterize``: the seed's Table 3 (and Table 1) per steady segment."""
     rig = load_rig(rig_path)
-    recording = read_recording(recording_path, required=(MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS))
+    recording = read_recording(
+        recording_path, required=(MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS)
+    )
     segments = characterize(recording, rig)
-    result = {"recording": str(recording_path), "segments": [s.as_dict() for s in segments]}
-    header = (f"{'segment s':>13s}{'max p MPa':>10s}{'k_eh*':>7s}{'eta_eh':>7s}"
-              f"{'2c_fs*':>7s}{'2c_ss*':>7s}{'2c_fb*':>7s}{'xi':>6s}  slips")
+    result: dict[str, object] = {
+        "recording": str(recording_path),
+        "segments": [s.as_dict() for s in segments],
+    }
+    header = (
+        f"{'segment s':>13s}{'max p MPa':>10s}{'k_eh*':>7s}{'eta_eh':>7s}"
+        f"{'2c_fs*':>7s}{'2c_ss*':>7s}{'2c_fb*':>7s}{'xi':>6s}  slips"
+    )
     print(f"recording {recording_path}  rig {rig_path} ({rig.name})")
     print(header)
     for s in segments:
@@ -85,14 +95,16 @@ def run_characterize(recording_path: Path, rig_path: Path,
     return result
 
 
-def run_simulate(rig_path: Path, out: Path, max_pressures: Sequence[float], pulsing_s: float,
-                 seed: int) -> Path:
+def run_simulate(
+    rig_path: Path, out: Path, max_pressures: Sequence[float], pulsing_s: float, seed: int
+) -> Path:
     """``brake-hil simulate``: an LTI-model recording with the DAQ's noise and quantisation."""
     rig = load_rig(rig_path)
     if out.exists():
         raise BrakeHilError(f"{out}: already exists; choose a new output directory")
-    time, pressure = pulsing_profile(max_pressures, pulsing_s=pulsing_s,
-                                     pulsing_hz=rig.excitation_hz)
+    time, pressure = pulsing_profile(
+        max_pressures, pulsing_s=pulsing_s, pulsing_hz=rig.excitation_hz
+    )
     params = derive_parameters(rig, float(np.mean(pressure[time > 1.0])))
     outputs = predict(pressure, params)
     rng = np.random.default_rng(seed)
@@ -133,8 +145,13 @@ def build_parser() -> argparse.ArgumentParser:
     sim = commands.add_parser("simulate", help="write a recording of the LTI model")
     sim.add_argument("--rig", type=Path, required=True, help="the rig to simulate (truth)")
     sim.add_argument("--out", type=Path, required=True, help="new rosbag2 directory")
-    sim.add_argument("--max-pressure", type=float, nargs="+", default=[1.38e6],
-                     help="maximum master-cylinder pressures, Pa (one segment each)")
+    sim.add_argument(
+        "--max-pressure",
+        type=float,
+        nargs="+",
+        default=[1.38e6],
+        help="maximum master-cylinder pressures, Pa (one segment each)",
+    )
     sim.add_argument("--pulsing-seconds", type=float, default=5.0)
     sim.add_argument("--seed", type=int, default=0)
     return parser

@@ -11,9 +11,13 @@ if [ ! -x "$venv/bin/python" ]; then
 fi
 if [ ! -f "$stamp" ] || [ "$here/setup.py" -nt "$stamp" ]; then
   echo "brake_hil: installing dependencies into $venv (first run takes about a minute)" >&2
-  "$venv/bin/python" -m pip install --quiet --disable-pip-version-check --upgrade pip 2>/dev/null || true
-  "$venv/bin/python" -m pip install --quiet --disable-pip-version-check -e "$here[ros,dev]" 2>&1 \
-    | grep -v "is ignored: it is neither a file nor a directory" >&2 || true
+  log="$venv/install.log"
+  if ! "$venv/bin/python" -m pip install --disable-pip-version-check -e "$here[ros,dev]" \
+      >"$log" 2>&1; then
+    grep -v "is ignored: it is neither a file nor a directory" "$log" | tail -n 30 >&2
+    echo "brake_hil: pip install failed; full log in $log" >&2
+    exit 1
+  fi
   "$venv/bin/python" -c "import brake_hil, numpy, scipy, mcap, rosbags, can, rclpy" \
     || { echo "brake_hil: install failed" >&2; exit 1; }
   touch "$stamp"

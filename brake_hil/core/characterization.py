@@ -12,14 +12,15 @@ Conventions (physics.md asks to state them):
 * Seal displacement ``x_s = x_p - x_c = F_k / k_k - x_c`` (seed); seal force from the piston
   balance, eq. 21e: ``F_s = A_ep p_b - F_k - M_p x_p''``. Both seals together.
 * ``k_eh`` is the secant stiffness of the seal loop at the displacement turning points, i.e.
-  the in-phase part of ``F_s`` over ``x_s`` at the fundamental, ``Re(F_s / X_s)``; for a Jenkins element
-  it is the peak force over the peak displacement, for the LTI model it is exactly ``k_eh``.
+  the in-phase part of ``F_s`` over ``x_s`` at the fundamental, ``Re(F_s / X_s)``; for a
+  Jenkins element it is about the peak force over the peak displacement, for the LTI model
+  it is exactly ``k_eh``.
   The printed eq. 4, ``k_eh = F_fs / X_s`` with the *theoretical* ``F_fs``, is reported too
   as ``k_eh_eq4``.
 * ``c_eh`` is the dissipated energy of the seal loop over ``pi w_e X_s^2`` (eq. 1 applied to
   the seal's own force and displacement, exact for the LTI model); at the fundamental the
-  loop's area is ``pi Im(F_s conj(X_s))``, so ``c_eh = Im(F_s / X_s) / w_e``. The seed's literal eq. 1
-  on ``F_k`` against ``x_c`` is reported as ``c_eh_eq1``.
+  loop's area is ``pi Im(F_s conj(X_s))``, so ``c_eh = Im(F_s / X_s) / w_e``. The seed's
+  literal eq. 1 on ``F_k`` against ``x_c`` is reported as ``c_eh_eq1``.
 * ``c_fs`` (eq. 5, Jenkins loop ``dU_s = 4 F_fs (X_s - c_s)``), ``c_ss`` (eq. 6, scaled by the
   sticking share ``min(1, c_s / 2 X_s)``) and ``c_fb`` (eqs. 8-9) are per seal / per bore;
   the index ``xi = (2 c_fs + 2 c_ss + 2 c_fb) / c_eh`` (eq. 10), ``eta_eh = c_eh w_e / k_eh``
@@ -28,8 +29,8 @@ Conventions (physics.md asks to state them):
 
 from __future__ import annotations
 
-import math
 from dataclasses import asdict, dataclass
+import math
 
 import numpy as np
 
@@ -87,7 +88,10 @@ def loop_area(displacement: FloatArray, force: FloatArray) -> float:
 
 
 def jenkins_loop_area(friction_threshold: float, slip_threshold: float, amplitude: float) -> float:
-    """Energy dissipated per cycle by a spring + Coulomb slider, ``4 F_fs (X - c_s)`` (J), eq. 5."""
+    """Energy dissipated per cycle by a spring + Coulomb slider, ``4 F_fs (X - c_s)`` (J).
+
+    Seed eq. 5; zero while the seal sticks (``X <= c_s``).
+    """
     return 4.0 * friction_threshold * max(amplitude - slip_threshold, 0.0)
 
 
@@ -108,8 +112,7 @@ def characterize(recording: Recording, rig: Rig) -> list[SegmentCharacterization
     }
     filtered["p_i"] = input_filtered
     return [
-        _characterize_segment(recording.time, filtered, rig, start, end)
-        for start, end in segments
+        _characterize_segment(recording.time, filtered, rig, start, end) for start, end in segments
     ]
 
 
@@ -152,14 +155,21 @@ def _characterize_segment(
     bore_pressure = filtered["p_b"][window]
     caliper_displacement = filtered["x_c"][window]
     mean_friction = (
-        4.0 * rig.bore_friction_coefficient * rig.bore_area_ratio * area_ep
+        4.0
+        * rig.bore_friction_coefficient
+        * rig.bore_area_ratio
+        * area_ep
         * float(np.mean(np.abs(bore_pressure * caliper_displacement)))
         / rig.transducer_distance
     )
     c_fb = mean_friction / (omega * amplitude * 2.0 / math.pi)
     harmonics = {
-        key: [float(v) for v in signals.harmonic_energy_shares(
-            filtered[key][window], rate, fundamental_hz=rig.excitation_hz)]
+        key: [
+            float(v)
+            for v in signals.harmonic_energy_shares(
+                filtered[key][window], rate, fundamental_hz=rig.excitation_hz
+            )
+        ]
         for key in ("p_i", "p_b", "F_k", "x_c")
     }
     return SegmentCharacterization(

@@ -109,9 +109,7 @@ def conditioned_channels(recording: Recording) -> dict[str, FloatArray]:
     return result
 
 
-def compare(
-    recording: Recording, rig: Rig, params: ModelParameters | None = None
-) -> Comparison:
+def compare(recording: Recording, rig: Rig, params: ModelParameters | None = None) -> Comparison:
     """Score the model on every steady segment of ``recording`` (seed Tables 4-5).
 
     ``params`` fixes the model coefficients for all segments; by default they are derived

@@ -289,9 +289,7 @@ def _simulate_loop(model: DiscreteModel, u: FloatArray) -> FloatArray:
     states[0] = state
     for k in range(1, u.size):
         state = (
-            model.transition @ state
-            + model.input_previous * u[k - 1]
-            + model.input_current * u[k]
+            model.transition @ state + model.input_previous * u[k - 1] + model.input_current * u[k]
         )
         states[k] = state
     return np.asarray(model.output_matrix @ states.T)

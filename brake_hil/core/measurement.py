@@ -24,7 +24,7 @@ class Sensor(NamedTuple):
     @property
     def resolution(self) -> float:
         """One least-significant bit (SI)."""
-        return (self.high - self.low) / (2**self.bits - 1)
+        return (self.high - self.low) / float(2**self.bits - 1)
 
 
 SENSORS: dict[str, Sensor] = {

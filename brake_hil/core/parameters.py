@@ -14,8 +14,8 @@ Conventions this project chose where the printed equations are ambiguous (physic
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, replace
+import math
 
 from brake_hil.core.rig import Line, Rig
 
@@ -108,7 +108,9 @@ def reynolds_number(flow: float, line: Line, density: float, viscosity: float) -
     return abs(flow) * density * line.diameter / (viscosity * area)
 
 
-def valve_resistance(volume_coefficient: float, specific_weight: float, pressure_drop: float) -> float:
+def valve_resistance(
+    volume_coefficient: float, specific_weight: float, pressure_drop: float
+) -> float:
     """Linearised needle-valve resistance ``2 sqrt(gamma dp_o) / B_V`` (Pa s/m^3), eq. 16.
 
     ``volume_coefficient`` B_V in m^3/s per sqrt(Pa/(N/m^3)); ``specific_weight`` gamma =
@@ -144,7 +146,9 @@ def chamber_volumes(rig: Rig) -> tuple[float, float]:
     master = rig.master_cylinder
     master_area = math.pi * master.diameter**2 / 4.0
     washer_volume = area_ep * (rig.washers - 1) * rig.washer_thickness
-    master_volume = max(master_area * master.length - washer_volume, 0.05 * master_area * master.length)
+    master_volume = max(
+        master_area * master.length - washer_volume, 0.05 * master_area * master.length
+    )
     bore_volume = rig.bore_area_ratio * area_ep * rig.bore_length + washer_volume
     return master_volume, bore_volume
 
@@ -204,7 +208,9 @@ def apply_overrides(params: ModelParameters, rig: Rig) -> ModelParameters:
     if "C_i" in o:
         changes["master_compliance"] = o["C_i"]
     if "R_v" in o:
-        changes["line_resistance"] = params.line_resistance - rig.needle_valve_resistance + o["R_v"]
+        changes["line_resistance"] = (
+            params.line_resistance - rig.needle_valve_resistance + o["R_v"]
+        )
     if "R_line" in o:
         changes["line_resistance"] = o["R_line"]
     if "I_line" in o:

@@ -9,10 +9,10 @@ air-pressure input (seed eqs. 21a-b); ``model`` overrides derived model paramete
 
 from __future__ import annotations
 
-import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+import re
 from typing import Any, NamedTuple
 
 import yaml
@@ -235,7 +235,10 @@ def rig_from_mapping(document: object, source: str = "<memory>") -> Rig:
     if "master_cylinder" in raw:
         master.update(
             _check_mapping(
-                raw["master_cylinder"], MASTER_CYLINDER_SCHEMA, source, "master_cylinder.",
+                raw["master_cylinder"],
+                MASTER_CYLINDER_SCHEMA,
+                source,
+                "master_cylinder.",
                 all_optional=True,
             )
         )

@@ -21,8 +21,8 @@ input (wrong shape, NaN, too short, no oscillation) with :class:`~brake_hil.erro
 
 from __future__ import annotations
 
-import math
 from dataclasses import asdict, dataclass
+import math
 from typing import NamedTuple
 
 import numpy as np

@@ -18,9 +18,9 @@ message starts with the path; the library's exception is chained as the cause.
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 import errno
 import os
-from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Final, NamedTuple
 

@@ -19,9 +19,9 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Final, NamedTuple
 
-import numpy as np
 from mcap.writer import CompressionType
 from mcap.writer import Writer as McapWriter
+import numpy as np
 from rosbags.interfaces import (
     Connection,
     MessageDefinitionFormat,
@@ -120,6 +120,8 @@ class TopicSeries(NamedTuple):
     stamps_ns: IntArray  # header.stamp of each sample (ns since the epoch)
     values: FloatArray  # the topic's field (SI units)
     log_times_ns: IntArray | None = None  # when each sample was logged (ns); None: the stamps
+    # Readers return messages in log-time order; to record a rig clock that jumps back,
+    # give log times that run on while the stamps go back.
 
 
 @lru_cache(maxsize=1)
@@ -141,6 +143,12 @@ def _checked(spec: TopicSpec, series: TopicSeries) -> tuple[IntArray, FloatArray
         raise ValueError(msg)
     if stamps.size and logged.min() < 0:
         raise ValueError(f"{spec.name}: log times must not be negative")
+    if series.log_times_ns is None and (back := np.flatnonzero(np.diff(stamps) < 0)).size:
+        msg = (
+            f"{spec.name}: stamps go backwards at sample {back[0] + 1}; messages are stored in "
+            "log-time order, so give log_times_ns to record them as they were logged"
+        )
+        raise ValueError(msg)
     return stamps, values, logged
 
 
@@ -166,7 +174,8 @@ def write_topics(
     Raises:
         FileExistsError: ``path`` exists (nothing is overwritten).
         ValueError: arrays of different lengths, an unsupported type or field, a stamp
-            outside ``builtin_interfaces/msg/Time``, a negative log time.
+            outside ``builtin_interfaces/msg/Time``, a negative log time, stamps going
+            backwards without log times (they would be stored sorted, hiding the jump).
     """
     path = Path(path)
     if path.exists():

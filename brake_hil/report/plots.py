@@ -85,4 +85,3 @@ def plot_comparison(comparison: Comparison, path: Path, title: str, cycles: int 
     figure.savefig(path, dpi=90)
     plt.close(figure)
     return path
-

@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 import shutil
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -22,7 +22,6 @@ from brake_hil.topics import (
     CALIPER_DISPLACEMENT,
     MASTER_CYLINDER_PRESSURE,
 )
-
 from test.conftest import CONFIG, PEER_DATA
 
 RIG = CONFIG / "rig_default.yaml"
@@ -57,9 +56,19 @@ def recording(tmp_path_factory: pytest.TempPathFactory, default_rig: Rig) -> Pat
     return _write(tmp_path_factory.mktemp("rec") / "one_washer", default_rig)
 
 
-def test_compare_of_the_model_on_its_own_output_is_perfect(recording: Path, tmp_path: Path) -> None:
-    result = brake_hil("compare", recording, "--rig", RIG, "--json", tmp_path / "c.json",
-                       "--plot", tmp_path / "c.png")
+def test_compare_of_the_model_on_its_own_output_is_perfect(
+    recording: Path, tmp_path: Path
+) -> None:
+    result = brake_hil(
+        "compare",
+        recording,
+        "--rig",
+        RIG,
+        "--json",
+        tmp_path / "c.json",
+        "--plot",
+        tmp_path / "c.png",
+    )
     assert result.returncode == 0, result.stderr
     metrics = json.loads((tmp_path / "c.json").read_text())["metrics"]
     assert set(metrics) == {"p_b", "F_k", "x_c"}
@@ -89,8 +98,20 @@ def test_characterize_writes_table_3_per_segment(recording: Path, tmp_path: Path
     segments = json.loads((tmp_path / "t3.json").read_text())["segments"]
     assert len(segments) == 1
     segment = segments[0]
-    for key in ("t_start", "t_end", "max_pressure", "ptp_pressure", "k_eh", "c_eh", "k_eh_star",
-                "eta_eh", "c_fs", "c_ss", "c_fb", "xi"):
+    for key in (
+        "t_start",
+        "t_end",
+        "max_pressure",
+        "ptp_pressure",
+        "k_eh",
+        "c_eh",
+        "k_eh_star",
+        "eta_eh",
+        "c_fs",
+        "c_ss",
+        "c_fb",
+        "xi",
+    ):
         assert np.isfinite(segment[key]), key
     assert segment["k_eh_star"] == pytest.approx(0.29, rel=0.01)
     assert segment["eta_eh"] == pytest.approx(0.93, rel=0.01)
@@ -98,7 +119,9 @@ def test_characterize_writes_table_3_per_segment(recording: Path, tmp_path: Path
 
 def test_simulate_writes_a_recording_that_compare_reads(tmp_path: Path) -> None:
     out = tmp_path / "sim"
-    assert brake_hil("simulate", "--rig", RIG, "--out", out, "--pulsing-seconds", "3").returncode == 0
+    assert (
+        brake_hil("simulate", "--rig", RIG, "--out", out, "--pulsing-seconds", "3").returncode == 0
+    )
     assert (out / "metadata.yaml").exists()
     again = brake_hil("simulate", "--rig", RIG, "--out", out)
     assert again.returncode == 2 and "already exists" in again.stderr
@@ -150,8 +173,9 @@ def test_stamps_going_backwards_exit_2(tmp_path: Path, default_rig: Rig) -> None
     time, pressure = pulsing_profile((1.38e6,), pulsing_s=2.0)
     stamps = (1_700_000_000_000_000_000 + time * 1e9).astype(np.int64)
     stamps[500], stamps[501] = stamps[501], stamps[500]
-    bag = write_topics(tmp_path / "backwards",
-                       {MASTER_CYLINDER_PRESSURE: TopicSeries(stamps, pressure)})
+    bag = write_topics(
+        tmp_path / "backwards", {MASTER_CYLINDER_PRESSURE: TopicSeries(stamps, pressure)}
+    )
     line = _single_error_line(brake_hil("compare", bag, "--rig", RIG))
     assert "backwards" in line.lower() and "backwards" in line
 
@@ -166,17 +190,30 @@ def test_bad_rig_key_exits_2_naming_the_key(recording: Path, tmp_path: Path) -> 
 def test_recording_without_steady_pulsing_exits_2(tmp_path: Path) -> None:
     time = np.arange(0.0, 3.0, 1e-3)
     ramp = 1e6 * time
-    bag = write_recording(tmp_path / "ramp", time, {
-        MASTER_CYLINDER_PRESSURE: ramp, BORE_PRESSURE: ramp, BLOCK_FORCE: ramp * 1e-3,
-        CALIPER_DISPLACEMENT: -ramp * 1e-11})
+    bag = write_recording(
+        tmp_path / "ramp",
+        time,
+        {
+            MASTER_CYLINDER_PRESSURE: ramp,
+            BORE_PRESSURE: ramp,
+            BLOCK_FORCE: ramp * 1e-3,
+            CALIPER_DISPLACEMENT: -ramp * 1e-11,
+        },
+    )
     line = _single_error_line(brake_hil("compare", bag, "--rig", RIG))
     assert "ramp" in line and "5 Hz" in line
 
 
 @pytest.mark.parametrize(
     "bag",
-    ["mcap/talker", "mcap/wbag", "mcap/cdr_test", "mcap/bag_with_topics_and_service_events",
-     "sqlite3/talker", "sqlite3/wbag"],
+    [
+        "mcap/talker",
+        "mcap/wbag",
+        "mcap/cdr_test",
+        "mcap/bag_with_topics_and_service_events",
+        "sqlite3/talker",
+        "sqlite3/wbag",
+    ],
 )
 def test_rosbag2s_own_bags_are_opened_and_the_brake_topics_named_missing(bag: str) -> None:
     path = PEER_DATA / "rosbag2" / bag

@@ -83,12 +83,16 @@ def test_default_rig_reproduces_the_operating_point_of_physics_md(default_rig: R
     pressure = 0.9e6 + 0.3e6 * np.sin(10 * np.pi * time)
     params = derive_parameters(default_rig, 0.9e6)
     steady = slice(2000, None)
-    p_b, f_k, x_c = np.ptp(simulate(discretize(caliper_state_space(params)), pressure)[:, steady], axis=1)
+    p_b, f_k, x_c = np.ptp(
+        simulate(discretize(caliper_state_space(params)), pressure)[:, steady], axis=1
+    )
     assert p_b == pytest.approx(0.61e6, rel=0.02)
     assert f_k == pytest.approx(1.26e3, rel=0.03)
     assert x_c == pytest.approx(37e-6, rel=0.03)
     restricted = params.with_changes(line_resistance=params.line_resistance - 3.2e10 + 1.3e11)
-    p_b_restricted = np.ptp(simulate(discretize(caliper_state_space(restricted)), pressure)[0, steady])
+    p_b_restricted = np.ptp(
+        simulate(discretize(caliper_state_space(restricted)), pressure)[0, steady]
+    )
     assert p_b_restricted == pytest.approx(0.41e6, rel=0.02)
 
 
@@ -129,7 +133,10 @@ def test_state_space_picks_the_input(default_rig: Rig) -> None:
     params = derive_parameters(default_rig)
     assert state_space(params, ModelInput.AIR_PRESSURE).state_matrix.shape == (9, 9)
     assert state_space(params, ModelInput.MASTER_CYLINDER_PRESSURE).output_names == (
-        "p_b", "F_k", "x_c")
+        "p_b",
+        "F_k",
+        "x_c",
+    )
 
 
 def test_simulate_refuses_an_empty_input(default_rig: Rig) -> None:

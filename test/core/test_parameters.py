@@ -12,8 +12,8 @@ from brake_hil.core.parameters import (
     effective_bulk_modulus,
     line_inertance,
     line_resistance,
-    reynolds_number,
     restricted_volume_coefficient,
+    reynolds_number,
     seal_properties,
     valve_resistance,
 )
@@ -29,7 +29,9 @@ def test_seal_threshold_stiffness_and_slip_displacement(default_rig: Rig) -> Non
 
 def test_line_resistance_and_inertance(default_rig: Rig) -> None:
     fluid = default_rig.fluid
-    assert line_resistance(default_rig.hard_pipe, fluid.viscosity) == pytest.approx(4.7e9, rel=0.01)
+    assert line_resistance(default_rig.hard_pipe, fluid.viscosity) == pytest.approx(
+        4.7e9, rel=0.01
+    )
     assert line_resistance(default_rig.hose, fluid.viscosity) == pytest.approx(1.9e9, rel=0.03)
     assert line_inertance(default_rig.hard_pipe, fluid.density) == pytest.approx(2.6e8, rel=0.01)
     assert line_inertance(default_rig.hose, fluid.density) == pytest.approx(1.0e8, rel=0.05)
@@ -46,7 +48,13 @@ def test_default_seal_terms_are_the_seed_operating_point(default_rig: Rig) -> No
     params = derive_parameters(default_rig)
     k_s = seal_properties(default_rig).static_stiffness
     assert 0.5 * params.effective_hydraulic_stiffness / k_s == pytest.approx(0.29)
-    eta = params.effective_hydraulic_damping * 2 * math.pi * 5.0 / params.effective_hydraulic_stiffness
+    eta = (
+        params.effective_hydraulic_damping
+        * 2
+        * math.pi
+        * 5.0
+        / params.effective_hydraulic_stiffness
+    )
     assert eta == pytest.approx(0.93)
 
 
@@ -71,11 +79,10 @@ def test_valve_equations_and_reynolds_number(default_rig: Rig) -> None:
 
 def test_model_mapping_overrides_derived_values(default_rig: Rig) -> None:
     base = derive_parameters(default_rig)
-    rig = Rig(**{**default_rig.__dict__, "model_overrides": {"k_eh": 1e6, "R_v": 1.3e11,
-                                                              "C_b": 1e-13}})
+    rig = Rig(
+        **{**default_rig.__dict__, "model_overrides": {"k_eh": 1e6, "R_v": 1.3e11, "C_b": 1e-13}}
+    )
     params = derive_parameters(rig)
     assert params.effective_hydraulic_stiffness == 1e6
     assert params.bore_compliance == 1e-13
     assert params.line_resistance - base.line_resistance == pytest.approx(1.3e11 - 3.2e10)
-
-

@@ -9,14 +9,20 @@ import yaml
 
 from brake_hil.core.rig import load_rig, rig_from_mapping
 from brake_hil.errors import RigError
-
 from test.conftest import CONFIG
 
 
 def _default_document() -> dict:  # type: ignore[type-arg]
-    return yaml.safe_load((CONFIG / "rig_default.yaml").read_text().replace("e7", "e+7")
-                          .replace("e9", "e+9").replace("e6", "e+6").replace("e11", "e+11")
-                          .replace("e10", "e+10").replace("e-3", "e-03"))
+    return yaml.safe_load(
+        (CONFIG / "rig_default.yaml")
+        .read_text()
+        .replace("e7", "e+7")
+        .replace("e9", "e+9")
+        .replace("e6", "e+6")
+        .replace("e11", "e+11")
+        .replace("e10", "e+10")
+        .replace("e-3", "e-03")
+    )
 
 
 def test_default_rig_holds_the_values_of_physics_md() -> None:

@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 import json
 import math
-from collections.abc import Callable
 
 import numpy as np
 import pytest

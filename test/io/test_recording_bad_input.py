@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from mcap.reader import make_reader
 import numpy as np
 import pytest
-from mcap.reader import make_reader
 
 from brake_hil.core.types import FloatArray
 from brake_hil.errors import MissingTopicError, RecordingError
@@ -210,3 +210,16 @@ def test_a_channel_that_does_not_overlap_the_input_is_refused(tmp_path: Path, ru
 def test_list_topics_refuses_a_missing_path_too(tmp_path: Path) -> None:
     with pytest.raises(RecordingError, match="no_such_bag: no such file or directory"):
         list_topics(tmp_path / "no_such_bag")
+
+
+def test_the_writer_refuses_backward_stamps_without_log_times(tmp_path: Path, run: Run) -> None:
+    """Stored in log-time order, such samples would read back sorted, hiding the jump."""
+    time, channels = run
+    stamps = _stamps(time)
+    stamps[500], stamps[501] = stamps[501], stamps[500]
+    with pytest.raises(ValueError, match="sample 501.*log_times_ns"):
+        write_topics(
+            tmp_path / "run",
+            {MASTER_CYLINDER_PRESSURE: TopicSeries(stamps, channels[MASTER_CYLINDER_PRESSURE])},
+        )
+    assert not (tmp_path / "run").exists()

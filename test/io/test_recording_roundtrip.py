@@ -2,18 +2,18 @@
 
 from __future__ import annotations
 
+from pathlib import Path
 import shutil
 import time as wallclock
-from pathlib import Path
 
-import numpy as np
-import pytest
-import yaml
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 from mcap_ros2.writer import Writer as McapRos2Writer
+import numpy as np
+import pytest
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
+import yaml
 
 from brake_hil.core.types import FloatArray
 from brake_hil.io.recording_reader import list_topics, read_recording

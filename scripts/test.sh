@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# Set up (first run) and run every check: ruff (ament_flake8's rules), mypy strict on the
+# core and I/O, then the tests. Extra arguments go to pytest (e.g. -k characterisation).
+set -euo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$here"
+bash scripts/setup.sh
+# Any ROS node a test starts talks over loopback only (no multicast on the network).
+export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
+echo "== ruff" && .venv/bin/ruff check brake_hil test benchmarks
+echo "== mypy" && .venv/bin/mypy brake_hil/core brake_hil/io brake_hil/cli.py \
+  brake_hil/topics.py brake_hil/errors.py
+echo "== pytest" && .venv/bin/python -m pytest -q -p no:cacheprovider test "$@"
