@@ -2,7 +2,7 @@
 
 ``sensor_msgs/msg/FluidPressure``, ``geometry_msgs/msg/WrenchStamped`` and
 ``geometry_msgs/msg/Vector3Stamped`` are a ``std_msgs/msg/Header`` followed by float64 fields
-only, so in XCDR1 (what every ROS 2 rmw writes; OMG DDS-XTypes 1.3, 7.4.3) their layout is
+only, so in XCDR1 (what ROS 2 rmw implementations write; OMG DDS-XTypes 1.3, 7.4.3) their layout is
 fixed once the length of ``header.frame_id`` is known::
 
     offset        size  content

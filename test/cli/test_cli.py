@@ -171,13 +171,19 @@ def test_stamps_going_backwards_exit_2(tmp_path: Path, default_rig: Rig) -> None
     from brake_hil.io.recording_writer import TopicSeries, write_topics
 
     time, pressure = pulsing_profile((1.38e6,), pulsing_s=2.0)
-    stamps = (1_700_000_000_000_000_000 + time * 1e9).astype(np.int64)
-    stamps[500], stamps[501] = stamps[501], stamps[500]
-    bag = write_topics(
-        tmp_path / "backwards", {MASTER_CYLINDER_PRESSURE: TopicSeries(stamps, pressure)}
-    )
+    outputs = predict(pressure, derive_parameters(default_rig))
+    stamps = (1_700_000_000_000_000_000 + np.round(time * 1e9)).astype(np.int64)
+    jumped = stamps.copy()  # the rig clock jumps back once; messages are logged in order
+    jumped[500], jumped[501] = jumped[501], jumped[500]
+    series = {
+        MASTER_CYLINDER_PRESSURE: TopicSeries(jumped, pressure, stamps),
+        BORE_PRESSURE: TopicSeries(stamps, outputs["p_b"]),
+        BLOCK_FORCE: TopicSeries(stamps, outputs["F_k"]),
+        CALIPER_DISPLACEMENT: TopicSeries(stamps, outputs["x_c"]),
+    }
+    bag = write_topics(tmp_path / "clock_jump", series)
     line = _single_error_line(brake_hil("compare", bag, "--rig", RIG))
-    assert "backwards" in line.lower() and "backwards" in line
+    assert "clock_jump" in line and "go backwards at sample 501" in line
 
 
 def test_bad_rig_key_exits_2_naming_the_key(recording: Path, tmp_path: Path) -> None:
