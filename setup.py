@@ -49,6 +49,11 @@ setup(
     entry_points={
         "console_scripts": [
             "brake-hil = brake_hil.cli:main",
+            "pressure_source = brake_hil.nodes.pressure_source:main",
+            "caliper_model = brake_hil.nodes.caliper_model:main",
+            "comparator = brake_hil.nodes.comparator:main",
+            "recorder = brake_hil.nodes.recorder:main",
+            "rig_emulator = brake_hil.nodes.rig_emulator:main",
         ],
     },
 )
