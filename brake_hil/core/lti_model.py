@@ -221,12 +221,11 @@ class CaliperStepper:
 
     def __init__(self, model: DiscreteModel) -> None:
         self._model = model
-        # Plain Python lists: a 6x6 product in pure Python beats numpy's call overhead.
-        self._transition = model.transition.tolist()
-        self._input_previous = model.input_previous.tolist()
-        self._input_current = model.input_current.tolist()
-        self._output = model.output_matrix[:3].tolist()
-        self._state: list[float] | None = None
+        self._transition = model.transition
+        self._input_previous = model.input_previous
+        self._input_current = model.input_current
+        self._output = model.output_matrix[:3]
+        self._state: FloatArray | None = None
         self._previous_input = 0.0
 
     @property
@@ -240,20 +239,17 @@ class CaliperStepper:
 
     def step(self, pressure: float) -> ModelOutput:
         """Advance one sample with the new input ``pressure`` (Pa); return the outputs."""
-        state = self._state
-        if state is None:
-            state = (self._model.equilibrium_gain * pressure).tolist()
+        if self._state is None:
+            state = self._model.equilibrium(pressure)
         else:
-            previous = self._previous_input
-            state = [
-                sum(a * z for a, z in zip(row, state)) + g_prev * previous + g_now * pressure
-                for row, g_prev, g_now in zip(
-                    self._transition, self._input_previous, self._input_current
-                )
-            ]
+            state = (
+                self._transition @ self._state
+                + self._input_previous * self._previous_input
+                + self._input_current * pressure
+            )
         self._state = state
         self._previous_input = pressure
-        p_b, f_k, x_c = (sum(c * z for c, z in zip(row, state)) for row in self._output)
+        p_b, f_k, x_c = (self._output @ state).tolist()
         return ModelOutput(p_b, f_k, x_c)
 
 
