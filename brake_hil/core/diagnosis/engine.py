@@ -1,0 +1,356 @@
+"""Simulator of the diagnosis's candidate models: the LTI caliper model plus left-out physics.
+
+The diagnosis fits many candidate models, each many times, so this simulator runs a *batch*
+of parameter sets in one pass (one pass gives a whole finite-difference Jacobian):
+
+* The linear part (eq. 21c-f, optionally with an extra hose node) is discretised exactly with
+  a first-order hold on ``p_i``, as :mod:`brake_hil.core.lti_model` does.
+* One Jenkins element (spring ``k_j`` and Coulomb slider) may act between piston and caliper,
+  in parallel with the equivalent seal spring and damper: its slip threshold is a constant
+  per direction (seal friction; apply and release differ with groove asymmetry) plus a term
+  ``mu p_b |x_c|`` (piston-bore friction from caliper cocking, seed eq. 8). The element
+  switches between two exactly discretised linear systems, *stuck* (spring present, offset
+  held) and *slipping* (spring absent, the friction force an input held over the step), so a
+  stiff stuck seal is integrated exactly and slip adds no artificial damping.
+* Other nonlinear terms are inputs held over one step (exponential integrator): a quadratic
+  orifice drop ``K Q |Q|`` on top of the linear line resistance, and the load-dependent part of
+  the caliper's share of the pressure force.
+* Terms that change the stiff linear part itself are scheduled: the transition matrices are
+  tabulated over a grid of bore pressure (compliance of entrained air) and of time blocks
+  (drift of viscosity and seal terms with temperature); each step takes its entry.
+
+A candidate of :mod:`brake_hil.core.diagnosis.candidates` only fills a :class:`ModelSpec`;
+this module knows no effect names.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+
+from brake_hil.core.lti_model import DiscreteModel, simulate
+from brake_hil.core.parameters import ModelParameters
+from brake_hil.core.types import FloatArray
+
+REFERENCE_PRESSURE = 1.0e6
+"""Pressure (Pa) about which load-dependent terms are written."""
+ATMOSPHERE = 1.013e5
+"""Absolute pressure of gauge zero (Pa)."""
+STATE_SCALE = {"Q_p": 1e-6, "p_h": 1e6, "Q_h": 1e-6, "p_b": 1e6, "x_p": 1e-6, "v_p": 1e-3,
+               "x_c": 1e-5, "v_c": 1e-3}
+
+# Explicit-input columns of the linear plant.
+RELATIVE_FORCE, CALIPER_FORCE, LINE_DROP = range(3)
+INPUTS = 3
+STUCK, SLIPPING = 0, 1
+
+
+@dataclass(frozen=True)
+class ModelSpec:
+    """One candidate model for a batch of ``B`` parameter sets (arrays of length ``B``).
+
+    Every optional field left ``None`` keeps the LTI model of ``params``.
+    """
+
+    params: tuple[ModelParameters, ...]  # coefficients per set (calibrated LTI, adjusted)
+    jenkins_spring: FloatArray | None = None  # N/m, k_j of the friction element
+    apply_threshold: FloatArray | None = None  # N, slip force while x_p - x_c grows
+    release_threshold: FloatArray | None = None  # N, slip force while it shrinks
+    bore_friction: FloatArray | None = None  # N/(Pa m), extra threshold per p_b |x_c|
+    orifice_coefficient: FloatArray | None = None  # Pa s^2/m^6, dp = K Q |Q|
+    hose_compliance: FloatArray | None = None  # m^3/Pa, node between pipe and hose
+    share_slope: FloatArray | None = None  # -, share s = s0 + s1 (p_b - p_ref) / p_ref
+    air_volume: FloatArray | None = None  # m^3, isothermal air volume at gauge zero
+    drift_rate: FloatArray | None = None  # 1/s, relative drift of line and seal terms
+    output_delay: FloatArray | None = None  # (B, 3) s, acquisition delay per channel
+
+    @property
+    def batch(self) -> int:
+        """Number of parameter sets."""
+        return len(self.params)
+
+    @property
+    def is_linear(self) -> bool:
+        """True when only linear terms are set (the fast modal path applies)."""
+        nonlinear = (
+            self.jenkins_spring, self.orifice_coefficient, self.share_slope, self.air_volume,
+            self.drift_rate,
+        )
+        return all(term is None for term in nonlinear)
+
+    @property
+    def has_jenkins(self) -> bool:
+        """True when a friction element acts between piston and caliper."""
+        return self.jenkins_spring is not None
+
+
+@dataclass(frozen=True)
+class _Plant:
+    A: FloatArray  # (n, n), scaled states
+    B: FloatArray  # (n,) p_i input
+    W: FloatArray  # (n, INPUTS) explicit inputs
+    C: FloatArray  # (3, n) SI outputs from scaled states
+    scale: FloatArray  # (n,)
+    index: dict[str, int]
+
+
+def _plant(
+    p: ModelParameters,
+    *,
+    relative_stiffness: float,
+    relative_damping: float,
+    line_resistance: float,
+    bore_compliance: float,
+    hose_compliance: float | None,
+) -> _Plant:
+    """Scaled continuous plant of eq. 21c-f with the given piston-caliper coupling."""
+    names = ["Q_h", "p_b", "x_p", "v_p", "x_c", "v_c"]
+    if hose_compliance is not None:
+        names = ["Q_p", "p_h", *names]
+    n = len(names)
+    i = {name: k for k, name in enumerate(names)}
+    A = np.zeros((n, n))
+    B = np.zeros(n)
+    W = np.zeros((n, INPUTS))
+    if hose_compliance is None:
+        A[i["Q_h"], i["Q_h"]] = -line_resistance / p.line_inertance
+        A[i["Q_h"], i["p_b"]] = -1.0 / p.line_inertance
+        B[i["Q_h"]] = 1.0 / p.line_inertance
+        W[i["Q_h"], LINE_DROP] = -1.0 / p.line_inertance
+    else:  # pipe and valve up to the node, the hose (a third of R and I) beyond it
+        hose_share = 0.3
+        r_pipe, r_hose = (1 - hose_share) * line_resistance, hose_share * line_resistance
+        i_pipe, i_hose = (1 - hose_share) * p.line_inertance, hose_share * p.line_inertance
+        A[i["Q_p"], i["Q_p"]] = -r_pipe / i_pipe
+        A[i["Q_p"], i["p_h"]] = -1.0 / i_pipe
+        B[i["Q_p"]] = 1.0 / i_pipe
+        W[i["Q_p"], LINE_DROP] = -1.0 / i_pipe
+        A[i["p_h"], i["Q_p"]] = 1.0 / hose_compliance
+        A[i["p_h"], i["Q_h"]] = -1.0 / hose_compliance
+        A[i["Q_h"], i["p_h"]] = 1.0 / i_hose
+        A[i["Q_h"], i["Q_h"]] = -r_hose / i_hose
+        A[i["Q_h"], i["p_b"]] = -1.0 / i_hose
+    A[i["p_b"], i["Q_h"]] = 1.0 / bore_compliance
+    A[i["p_b"], i["v_p"]] = -p.piston_area / bore_compliance
+    A[i["p_b"], i["v_c"]] = p.piston_area / bore_compliance
+    k, c = relative_stiffness, relative_damping
+    A[i["x_p"], i["v_p"]] = 1.0
+    A[i["v_p"], i["p_b"]] = p.piston_area / p.piston_mass
+    A[i["v_p"], i["x_p"]] = -(k + p.block_stiffness) / p.piston_mass
+    A[i["v_p"], i["x_c"]] = k / p.piston_mass
+    A[i["v_p"], i["v_p"]] = -c / p.piston_mass
+    A[i["v_p"], i["v_c"]] = c / p.piston_mass
+    A[i["x_c"], i["v_c"]] = 1.0
+    A[i["v_c"], i["p_b"]] = -p.bore_area / p.caliper_mass
+    A[i["v_c"], i["x_c"]] = -(k + p.caliper_stiffness) / p.caliper_mass
+    A[i["v_c"], i["x_p"]] = k / p.caliper_mass
+    A[i["v_c"], i["v_c"]] = -c / p.caliper_mass
+    A[i["v_c"], i["v_p"]] = c / p.caliper_mass
+    W[i["v_p"], RELATIVE_FORCE] = 1.0 / p.piston_mass  # + on the piston ...
+    W[i["v_c"], RELATIVE_FORCE] = -1.0 / p.caliper_mass  # ... and - on the caliper
+    W[i["v_c"], CALIPER_FORCE] = 1.0 / p.caliper_mass
+    C = np.zeros((3, n))
+    C[0, i["p_b"]] = 1.0
+    C[1, i["x_p"]] = p.block_stiffness
+    C[2, i["x_c"]] = 1.0
+    s = np.array([STATE_SCALE[name] for name in names])
+    return _Plant(A * s[None, :] / s[:, None], B / s, W / s[:, None], C * s[None, :], s, i)
+
+
+Discrete = tuple[FloatArray, FloatArray, FloatArray, FloatArray]
+
+
+def _discretize(plant: _Plant, h: float) -> Discrete:
+    """FOH on ``p_i``, ZOH on the explicit inputs: ``(Phi, G_prev, G_now, G_w)``."""
+    n = plant.A.shape[0]
+    block = np.zeros((n + 2 + INPUTS, n + 2 + INPUTS))
+    block[:n, :n] = plant.A * h
+    block[:n, n] = plant.B * h
+    block[n, n + 1] = 1.0
+    block[:n, n + 2 :] = plant.W * h
+    e = scipy.linalg.expm(block)
+    return e[:n, :n], e[:n, n] - e[:n, n + 1], e[:n, n + 1], e[:n, n + 2 :]
+
+
+@dataclass(frozen=True)
+class _Tables:
+    phi: FloatArray  # (T, L, M, n, n)
+    g_prev: FloatArray  # (T, L, M, n)
+    g_now: FloatArray  # (T, L, M, n)
+    g_w: FloatArray  # (T, L, M, n, INPUTS)
+    plant: _Plant  # the plant at the start (block 0, gauge zero, stuck)
+
+
+def _tables(spec: ModelSpec, b: int, pressures: FloatArray, blocks: int, block_s: float,
+            h: float) -> _Tables:
+    p = spec.params[b]
+    hose = None if spec.hose_compliance is None else float(spec.hose_compliance[b])
+    spring = 0.0 if spec.jenkins_spring is None else float(spec.jenkins_spring[b])
+    modes = (STUCK, SLIPPING) if spec.has_jenkins else (STUCK,)
+    entries: list[list[list[Discrete]]] = []
+    start: _Plant | None = None
+    for block in range(blocks):
+        drift = 1.0
+        if spec.drift_rate is not None:
+            drift = max(1.0 + float(spec.drift_rate[b]) * (block + 0.5) * block_s, 0.05)
+        row = []
+        for pressure in pressures:
+            compliance = p.bore_compliance
+            if spec.air_volume is not None:
+                absolute = max(float(pressure), 0.0) + ATMOSPHERE
+                compliance += float(spec.air_volume[b]) * ATMOSPHERE / absolute**2
+            by_mode = []
+            for mode in modes:
+                plant = _plant(
+                    p,
+                    relative_stiffness=drift * p.effective_hydraulic_stiffness
+                    + (spring if mode == STUCK else 0.0),
+                    relative_damping=drift * p.effective_hydraulic_damping,
+                    line_resistance=drift * p.line_resistance,
+                    bore_compliance=compliance,
+                    hose_compliance=hose,
+                )
+                start = start or plant
+                by_mode.append(_discretize(plant, h))
+            row.append(by_mode)
+        entries.append(row)
+    assert start is not None
+    stacked = [np.array([[[m[j] for m in lvl] for lvl in row] for row in entries])
+               for j in range(4)]
+    return _Tables(stacked[0], stacked[1], stacked[2], stacked[3], start)
+
+
+def _simulate_linear(spec: ModelSpec, u: FloatArray, sample_time: float) -> FloatArray:
+    """Linear candidates through the vectorised modal simulation of the LTI model."""
+    out = np.empty((spec.batch, 3, u.size))
+    for b, p in enumerate(spec.params):
+        hose = None if spec.hose_compliance is None else float(spec.hose_compliance[b])
+        plant = _plant(
+            p,
+            relative_stiffness=p.effective_hydraulic_stiffness,
+            relative_damping=p.effective_hydraulic_damping,
+            line_resistance=p.line_resistance,
+            bore_compliance=p.bore_compliance,
+            hose_compliance=hose,
+        )
+        phi, g_prev, g_now, _ = _discretize(plant, sample_time)
+        model = DiscreteModel(
+            transition=phi,
+            input_previous=g_prev,
+            input_current=g_now,
+            output_matrix=plant.C,
+            equilibrium_gain=np.asarray(-np.linalg.solve(plant.A, plant.B), dtype=float),
+            sample_time=sample_time,
+            output_names=("p_b", "F_k", "x_c"),
+        )
+        out[b] = simulate(model, u)
+    return _delay_outputs(spec, out, sample_time)
+
+
+def _delay_outputs(spec: ModelSpec, out: FloatArray, sample_time: float) -> FloatArray:
+    """Shift each channel by its acquisition delay (linear interpolation)."""
+    if spec.output_delay is None:
+        return out
+    time = np.arange(out.shape[-1]) * sample_time
+    for b in range(spec.batch):
+        for channel in range(3):
+            delay = float(spec.output_delay[b, channel])
+            if delay != 0.0:
+                out[b, channel] = np.interp(time - delay, time, out[b, channel])
+    return out
+
+
+def simulate_batch(
+    spec: ModelSpec,
+    pressure: FloatArray,
+    sample_time: float,
+    pressure_levels: int = 16,
+    block_s: float = 1.0,
+    start_time: float = 0.0,
+) -> FloatArray:
+    """Outputs ``(B, 3, N)`` (p_b Pa, F_k N, x_c m) of every parameter set of ``spec``
+    driven by ``pressure`` (Pa, one sample per ``sample_time`` s), from the equilibrium at
+    the first sample with every slider relaxed. ``start_time`` (s) is the first sample's time
+    in the recording (the drift schedule runs on recording time).
+    """
+    u = np.asarray(pressure, dtype=float)
+    if spec.is_linear:
+        return _simulate_linear(spec, u, sample_time)
+    steps, batch = u.size, spec.batch
+    air = spec.air_volume is not None
+    drifting = spec.drift_rate is not None
+    jenkins = spec.has_jenkins
+    grid = (np.linspace(0.0, max(float(u.max()), 1e5) * 1.2, pressure_levels) if air
+            else np.zeros(1))
+    blocks = int(np.ceil((start_time + steps * sample_time) / block_s)) if drifting else 1
+    tables = [_tables(spec, b, grid, blocks, block_s, sample_time) for b in range(batch)]
+    phi = np.stack([t.phi for t in tables])
+    g_prev = np.stack([t.g_prev for t in tables])
+    g_now = np.stack([t.g_now for t in tables])
+    g_w = np.stack([t.g_w for t in tables])
+    plant = tables[0].plant
+    out_c = np.stack([t.plant.C for t in tables])
+    z = np.stack([-np.linalg.solve(t.plant.A, t.plant.B * u[0]) for t in tables])
+    s, i = plant.scale, plant.index
+    i_pb, i_xp, i_vp, i_xc, i_vc = (i[k] for k in ("p_b", "x_p", "v_p", "x_c", "v_c"))
+    i_q = i.get("Q_p", i["Q_h"])
+
+    rows = np.arange(batch)
+    level = np.zeros(batch, dtype=int)
+    mode = np.zeros(batch, dtype=int)
+    offset = np.zeros(batch)  # slider position x_p - x_c at which the stuck spring is relaxed
+    direction = np.zeros(batch)  # +1 slipping while applying, -1 while releasing
+    explicit = np.zeros((batch, INPUTS))
+    spring = spec.jenkins_spring
+    apply_f = spec.apply_threshold if spec.apply_threshold is not None else np.zeros(batch)
+    release_f = spec.release_threshold if spec.release_threshold is not None else apply_f
+    bore = spec.bore_friction
+    orifice = spec.orifice_coefficient
+    slope = spec.share_slope
+    bore_area = np.array([p.bore_area for p in spec.params])
+    out = np.empty((batch, 3, steps))
+    out[:, :, 0] = np.einsum("bij,bj->bi", out_c, z)
+    for k in range(1, steps):
+        block = min(int((start_time + k * sample_time) / block_s), blocks - 1) if drifting else 0
+        p_b = z[:, i_pb] * s[i_pb]
+        if air:
+            level = np.clip(np.searchsorted(grid, p_b), 0, pressure_levels - 1)
+        if jenkins:
+            assert spring is not None
+            threshold_extra = 0.0 if bore is None else bore * np.abs(p_b * z[:, i_xc] * s[i_xc])
+            slip_force = np.where(direction > 0, apply_f, release_f) + threshold_extra
+            explicit[:, RELATIVE_FORCE] = np.where(
+                mode == STUCK, spring * offset, -direction * slip_force
+            )
+        if orifice is not None:
+            q = z[:, i_q] * s[i_q]
+            explicit[:, LINE_DROP] = orifice * q * np.abs(q)
+        if slope is not None:
+            explicit[:, CALIPER_FORCE] = (
+                -bore_area * slope * p_b * (p_b - REFERENCE_PRESSURE) / REFERENCE_PRESSURE
+            )
+        index = (rows, block, level, mode)
+        z = (
+            np.einsum("bij,bj->bi", phi[index], z)
+            + g_prev[index] * u[k - 1]
+            + g_now[index] * u[k]
+            + np.einsum("bij,bj->bi", g_w[index], explicit)
+        )
+        if jenkins:
+            assert spring is not None
+            seal = z[:, i_xp] * s[i_xp] - z[:, i_xc] * s[i_xc]
+            velocity = z[:, i_vp] * s[i_vp] - z[:, i_vc] * s[i_vc]
+            p_b = z[:, i_pb] * s[i_pb]
+            extra = 0.0 if bore is None else bore * np.abs(p_b * z[:, i_xc] * s[i_xc])
+            trial = spring * (seal - offset)
+            start_apply = (mode == STUCK) & (trial > apply_f + extra)
+            start_release = (mode == STUCK) & (trial < -(release_f + extra))
+            stick = (mode == SLIPPING) & (direction * velocity <= 0.0)
+            held = np.where(direction > 0, apply_f, release_f) + extra
+            offset = np.where(stick, seal - direction * held / spring, offset)
+            direction = np.where(start_apply, 1.0, np.where(start_release, -1.0, direction))
+            mode = np.where(start_apply | start_release, SLIPPING, np.where(stick, STUCK, mode))
+        out[:, :, k] = np.einsum("bij,bj->bi", out_c, z)
+    return _delay_outputs(spec, out, sample_time)

@@ -1,0 +1,221 @@
+"""Fit candidate models on the training windows and score them on the held-out windows.
+
+Each window is simulated from ``PREROLL`` seconds before it, starting at equilibrium, so the
+start-up transient has died away inside the window (the LTI model's slowest mode decays in
+about 0.1 s; a slider settles within one cycle). Training windows are capped at
+``FIT_SPAN`` seconds, which keeps a fit to a few seconds on this machine; held-out windows
+are scored whole.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+import scipy.optimize
+
+from brake_hil.core.diagnosis.calibration import Calibration
+from brake_hil.core.diagnosis.candidates.base import Candidate, Context, Draft
+from brake_hil.core.diagnosis.dataset import Dataset, Window
+from brake_hil.core.diagnosis.engine import ModelSpec, simulate_batch
+from brake_hil.core.parameters import chamber_volumes, seal_properties
+from brake_hil.core.types import FloatArray
+from brake_hil.topics import OUTPUT_CHANNELS
+
+PREROLL = 0.8
+"""Seconds simulated before a window (s)."""
+FIT_SPAN = 1.6
+"""Longest stretch of a training window used in a fit (s): eight 5 Hz cycles."""
+FIT_DECIMATION = 2
+"""Every n-th sample of a window enters the fit's residuals."""
+
+
+@dataclass(frozen=True)
+class Fit:
+    """A candidate set fitted to the training windows and scored on the held-out ones."""
+
+    effects: tuple[str, ...]
+    theta: FloatArray  # fitted parameters, natural units, concatenated over effects
+    parameter_names: tuple[str, ...]
+    parameter_units: tuple[str, ...]
+    train_cost: float  # mean squared normalised residual, training windows
+    held_out_cost: float  # the same on the held-out windows
+    held_out_nrmse: dict[str, float]  # per channel, held-out windows
+
+    def parameters(self) -> dict[str, float]:
+        """Fitted parameters by name."""
+        return dict(zip(self.parameter_names, self.theta.tolist()))
+
+
+class Model:
+    """A set of candidates on top of a calibration, simulated over dataset windows."""
+
+    def __init__(
+        self, calibration: Calibration, candidates: Sequence[Candidate], dataset: Dataset
+    ) -> None:
+        self.calibration = calibration
+        self.candidates = tuple(candidates)
+        self.dataset = dataset
+        self.context = make_context(calibration, dataset)
+        self.sizes = [len(c.parameters) for c in self.candidates]
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Effect names."""
+        return tuple(c.name for c in self.candidates)
+
+    def parameters(self) -> list[tuple[str, str, float, float, bool]]:
+        """``(name, unit, low, high, logarithmic)`` of every parameter, in theta order."""
+        return [
+            (p.name, p.unit, p.low, p.high, p.logarithmic)
+            for c in self.candidates
+            for p in c.parameters
+        ]
+
+    def start(self) -> FloatArray:
+        """Start parameters, concatenated."""
+        parts = [c.start(self.context) for c in self.candidates]
+        return np.concatenate(parts) if parts else np.zeros(0)
+
+    def spec(self, window: Window, theta: FloatArray) -> ModelSpec:
+        """The simulator spec of every row of ``theta`` (B, P) for one window."""
+        base = self.calibration.parameters(window.mean_pressure)
+        draft = Draft([base] * theta.shape[0])
+        column = 0
+        for candidate, size in zip(self.candidates, self.sizes):
+            candidate.fill(draft, theta[:, column : column + size], self.context)
+            column += size
+        return ModelSpec(tuple(draft.params), **draft.fields)  # type: ignore[arg-type]
+
+    def simulate(
+        self, window: Window, theta: FloatArray, span: float | None = None
+    ) -> tuple[FloatArray, npt.NDArray[np.intp]]:
+        """Outputs (B, 3, n) over a window (or its first ``span`` s) and its sample indices."""
+        ds = self.dataset
+        end = window.end if span is None else min(window.end, window.start + span)
+        first = int(np.searchsorted(ds.time, window.start - PREROLL))
+        last = int(np.searchsorted(ds.time, end - 1e-9))
+        inside = (ds.time[first:last] >= window.start - 1e-9)
+        outputs = simulate_batch(
+            self.spec(window, theta), ds.pressure[first:last], ds.sample_time,
+            start_time=float(ds.time[first]),
+        )
+        return outputs[:, :, inside], np.arange(first, last)[inside]
+
+    def residuals(
+        self, windows: Sequence[Window], theta: FloatArray, span: float | None = None,
+        decimation: int = 1,
+    ) -> FloatArray:
+        """Normalised residuals (B, samples) of each row of ``theta`` over ``windows``."""
+        scale = self.dataset.scale()
+        parts = []
+        for window in windows:
+            outputs, index = self.simulate(window, theta, span)
+            for channel, key in enumerate(OUTPUT_CHANNELS):
+                measured = self.dataset.measured[key][index]
+                parts.append(
+                    ((outputs[:, channel] - measured[None, :]) / scale[key])[:, ::decimation]
+                )
+        return np.concatenate(parts, axis=1)
+
+    def channel_nrmse(self, windows: Sequence[Window], theta: FloatArray) -> dict[str, float]:
+        """RMS error over peak-to-peak per channel for one parameter vector."""
+        scale = self.dataset.scale()
+        errors: dict[str, list[FloatArray]] = {key: [] for key in OUTPUT_CHANNELS}
+        for window in windows:
+            outputs, index = self.simulate(window, theta[None, :])
+            for channel, key in enumerate(OUTPUT_CHANNELS):
+                residual = outputs[0, channel] - self.dataset.measured[key][index]
+                errors[key].append(residual / scale[key])
+        return {key: float(np.sqrt(np.mean(np.concatenate(v) ** 2))) for key, v in errors.items()}
+
+
+def make_context(calibration: Calibration, dataset: Dataset) -> Context:
+    """What candidates may know: the rig's derived seal and volumes, the model's flow."""
+    rig = calibration.rig
+    window = dataset.segments[len(dataset.segments) // 2]
+    params = calibration.parameters(window.mean_pressure)
+    pressure_amplitude = 0.5 * float(np.ptp(dataset.pressure[dataset.mask((window,))]))
+    admittance = 1.0 / np.hypot(params.line_resistance, 2 * np.pi * rig.excitation_hz
+                                * params.line_inertance)
+    # Flow amplitude of the line driven by the input's swing against a stiff bore: an upper
+    # bound that sets the scale of the orifice term only.
+    flow = max(pressure_amplitude * admittance, 1e-9)
+    return Context(
+        seal=seal_properties(rig),
+        bore_volume=chamber_volumes(rig)[1],
+        flow_amplitude=flow,
+        transducer_distance=rig.transducer_distance,
+        bore_friction_coefficient=rig.bore_friction_coefficient,
+    )
+
+
+def _to_search(model: Model, theta: FloatArray) -> FloatArray:
+    return np.array([np.log(v) if log else v for v, (*_, log) in zip(theta, model.parameters())])
+
+
+def _from_search(model: Model, x: FloatArray) -> FloatArray:
+    return np.array([np.exp(v) if log else v for v, (*_, log) in zip(x, model.parameters())])
+
+
+def fit(model: Model, start: FloatArray | None = None, max_iterations: int = 12) -> Fit:
+    """Bounded least squares on the training windows; score on the held-out windows.
+
+    The Jacobian's columns are simulated in one batch with the point itself.
+    """
+    ds = model.dataset
+    specs = model.parameters()
+    if specs:
+        lower = np.array([np.log(lo) if log else lo for _, _, lo, _, log in specs])
+        upper = np.array([np.log(hi) if log else hi for _, _, _, hi, log in specs])
+        x0 = np.clip(_to_search(model, model.start() if start is None else start), lower, upper)
+        width = upper - lower
+        steps = 1e-3 * np.maximum(width, 1e-6)
+        cache: dict[bytes, FloatArray] = {}
+
+        def batch(x: FloatArray) -> FloatArray:
+            rows = [x] + [np.minimum(x + np.eye(x.size)[j] * steps[j], upper)
+                          for j in range(x.size)]
+            thetas = np.array([_from_search(model, r) for r in rows])
+            return model.residuals(ds.train, thetas, FIT_SPAN, FIT_DECIMATION)
+
+        def evaluate(x: FloatArray) -> FloatArray:
+            key = x.tobytes()
+            if key not in cache:
+                cache.clear()
+                cache[key] = batch(x)
+            return cache[key]
+
+        def residual(x: FloatArray) -> FloatArray:
+            r = evaluate(x)[0]
+            return np.asarray(r / np.sqrt(r.size), dtype=float)
+
+        def jacobian(x: FloatArray) -> FloatArray:
+            r = evaluate(x)
+            actual = np.array([np.minimum(x + np.eye(x.size)[j] * steps[j], upper)[j] - x[j]
+                               for j in range(x.size)])
+            actual = np.where(actual == 0.0, -steps, actual)
+            return np.asarray(((r[1:] - r[0]).T / actual) / np.sqrt(r.shape[1]), dtype=float)
+
+        result = scipy.optimize.least_squares(
+            residual, x0, jac=jacobian, bounds=(lower, upper), method="trf",
+            max_nfev=max_iterations, x_scale=width / 4,
+        )
+        theta = _from_search(model, result.x)
+        train_cost = float(2.0 * result.cost)
+    else:
+        theta = np.zeros(0)
+        r = model.residuals(ds.train, theta[None, :], FIT_SPAN, FIT_DECIMATION)[0]
+        train_cost = float(np.mean(r**2))
+    nrmse = model.channel_nrmse(ds.held_out, theta)
+    return Fit(
+        effects=model.names,
+        theta=theta,
+        parameter_names=tuple(name for name, *_ in specs),
+        parameter_units=tuple(unit for _, unit, *_ in specs),
+        train_cost=train_cost,
+        held_out_cost=float(np.mean([v**2 for v in nrmse.values()])),
+        held_out_nrmse=nrmse,
+    )
