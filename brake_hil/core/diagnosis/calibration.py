@@ -106,9 +106,7 @@ def simulate_lti(dataset: Dataset, params: ModelParameters) -> dict[str, FloatAr
 
 def calibrate(dataset: Dataset, rig: Rig) -> Calibration:
     """Least-squares calibration of the LTI baseline on the training windows."""
-    sigmas = {
-        u.name: max(rig.tolerance(u.tolerance_key), u.minimum_sigma) for u in UNCERTAIN
-    }
+    sigmas = {u.name: max(rig.tolerance(u.tolerance_key), u.minimum_sigma) for u in UNCERTAIN}
     names = list(sigmas)
     sigma = np.array([sigmas[n] for n in names])
     samples = int(dataset.mask(dataset.train).sum()) * len(OUTPUT_CHANNELS)
@@ -128,7 +126,11 @@ def calibrate(dataset: Dataset, rig: Rig) -> Calibration:
         return np.concatenate([data / (MODEL_ERROR * np.sqrt(samples)), log_m / sigma])
 
     fit = scipy.optimize.least_squares(
-        residuals, np.zeros(len(names)), method="trf", x_scale=sigma, diff_step=1e-3,
+        residuals,
+        np.zeros(len(names)),
+        method="trf",
+        x_scale=sigma,
+        diff_step=1e-3,
         max_nfev=60,
     )
     jacobian = fit.jac

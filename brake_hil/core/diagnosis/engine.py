@@ -38,8 +38,16 @@ REFERENCE_PRESSURE = 1.0e6
 """Pressure (Pa) about which load-dependent terms are written."""
 ATMOSPHERE = 1.013e5
 """Absolute pressure of gauge zero (Pa)."""
-STATE_SCALE = {"Q_p": 1e-6, "p_h": 1e6, "Q_h": 1e-6, "p_b": 1e6, "x_p": 1e-6, "v_p": 1e-3,
-               "x_c": 1e-5, "v_c": 1e-3}
+STATE_SCALE = {
+    "Q_p": 1e-6,
+    "p_h": 1e6,
+    "Q_h": 1e-6,
+    "p_b": 1e6,
+    "x_p": 1e-6,
+    "v_p": 1e-3,
+    "x_c": 1e-5,
+    "v_c": 1e-3,
+}
 
 # Explicit-input columns of the linear plant.
 RELATIVE_FORCE, CALIPER_FORCE, LINE_DROP = range(3)
@@ -75,7 +83,10 @@ class ModelSpec:
     def is_linear(self) -> bool:
         """True when only linear terms are set (the fast modal path applies)."""
         nonlinear = (
-            self.jenkins_spring, self.orifice_coefficient, self.share_slope, self.air_volume,
+            self.jenkins_spring,
+            self.orifice_coefficient,
+            self.share_slope,
+            self.air_volume,
             self.drift_rate,
         )
         return all(term is None for term in nonlinear)
@@ -183,8 +194,9 @@ class _Tables:
     plant: _Plant  # the plant at the start (block 0, gauge zero, stuck)
 
 
-def _tables(spec: ModelSpec, b: int, pressures: FloatArray, blocks: int, block_s: float,
-            h: float) -> _Tables:
+def _tables(
+    spec: ModelSpec, b: int, pressures: FloatArray, blocks: int, block_s: float, h: float
+) -> _Tables:
     p = spec.params[b]
     hose = None if spec.hose_compliance is None else float(spec.hose_compliance[b])
     spring = 0.0 if spec.jenkins_spring is None else float(spec.jenkins_spring[b])
@@ -217,8 +229,9 @@ def _tables(spec: ModelSpec, b: int, pressures: FloatArray, blocks: int, block_s
             row.append(by_mode)
         entries.append(row)
     assert start is not None
-    stacked = [np.array([[[m[j] for m in lvl] for lvl in row] for row in entries])
-               for j in range(4)]
+    stacked = [
+        np.array([[[m[j] for m in lvl] for lvl in row] for row in entries]) for j in range(4)
+    ]
     return _Tables(stacked[0], stacked[1], stacked[2], stacked[3], start)
 
 
@@ -282,8 +295,9 @@ def simulate_batch(
     air = spec.air_volume is not None
     drifting = spec.drift_rate is not None
     jenkins = spec.has_jenkins
-    grid = (np.linspace(0.0, max(float(u.max()), 1e5) * 1.2, pressure_levels) if air
-            else np.zeros(1))
+    grid = (
+        np.linspace(0.0, max(float(u.max()), 1e5) * 1.2, pressure_levels) if air else np.zeros(1)
+    )
     blocks = int(np.ceil((start_time + steps * sample_time) / block_s)) if drifting else 1
     tables = [_tables(spec, b, grid, blocks, block_s, sample_time) for b in range(batch)]
     phi = np.stack([t.phi for t in tables])

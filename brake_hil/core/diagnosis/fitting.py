@@ -43,10 +43,17 @@ class Fit:
     train_cost: float  # mean squared normalised residual, training windows
     held_out_cost: float  # the same on the held-out windows
     held_out_nrmse: dict[str, float]  # per channel, held-out windows
+    uncertainty: FloatArray | None = None  # one sigma of theta, natural units
 
     def parameters(self) -> dict[str, float]:
         """Fitted parameters by name."""
         return dict(zip(self.parameter_names, self.theta.tolist()))
+
+    def uncertainties(self) -> dict[str, float]:
+        """One-sigma uncertainty of each fitted parameter (natural units, linearised)."""
+        if self.uncertainty is None:
+            return {}
+        return dict(zip(self.parameter_names, self.uncertainty.tolist()))
 
 
 class Model:
@@ -97,15 +104,20 @@ class Model:
         end = window.end if span is None else min(window.end, window.start + span)
         first = int(np.searchsorted(ds.time, window.start - PREROLL))
         last = int(np.searchsorted(ds.time, end - 1e-9))
-        inside = (ds.time[first:last] >= window.start - 1e-9)
+        inside = ds.time[first:last] >= window.start - 1e-9
         outputs = simulate_batch(
-            self.spec(window, theta), ds.pressure[first:last], ds.sample_time,
+            self.spec(window, theta),
+            ds.pressure[first:last],
+            ds.sample_time,
             start_time=float(ds.time[first]),
         )
         return outputs[:, :, inside], np.arange(first, last)[inside]
 
     def residuals(
-        self, windows: Sequence[Window], theta: FloatArray, span: float | None = None,
+        self,
+        windows: Sequence[Window],
+        theta: FloatArray,
+        span: float | None = None,
         decimation: int = 1,
     ) -> FloatArray:
         """Normalised residuals (B, samples) of each row of ``theta`` over ``windows``."""
@@ -138,8 +150,9 @@ def make_context(calibration: Calibration, dataset: Dataset) -> Context:
     window = dataset.segments[len(dataset.segments) // 2]
     params = calibration.parameters(window.mean_pressure)
     pressure_amplitude = 0.5 * float(np.ptp(dataset.pressure[dataset.mask((window,))]))
-    admittance = 1.0 / np.hypot(params.line_resistance, 2 * np.pi * rig.excitation_hz
-                                * params.line_inertance)
+    admittance = 1.0 / np.hypot(
+        params.line_resistance, 2 * np.pi * rig.excitation_hz * params.line_inertance
+    )
     # Flow amplitude of the line driven by the input's swing against a stiff bore: an upper
     # bound that sets the scale of the orifice term only.
     flow = max(pressure_amplitude * admittance, 1e-9)
@@ -176,8 +189,9 @@ def fit(model: Model, start: FloatArray | None = None, max_iterations: int = 12)
         cache: dict[bytes, FloatArray] = {}
 
         def batch(x: FloatArray) -> FloatArray:
-            rows = [x] + [np.minimum(x + np.eye(x.size)[j] * steps[j], upper)
-                          for j in range(x.size)]
+            rows = [x] + [
+                np.minimum(x + np.eye(x.size)[j] * steps[j], upper) for j in range(x.size)
+            ]
             thetas = np.array([_from_search(model, r) for r in rows])
             return model.residuals(ds.train, thetas, FIT_SPAN, FIT_DECIMATION)
 
@@ -194,21 +208,32 @@ def fit(model: Model, start: FloatArray | None = None, max_iterations: int = 12)
 
         def jacobian(x: FloatArray) -> FloatArray:
             r = evaluate(x)
-            actual = np.array([np.minimum(x + np.eye(x.size)[j] * steps[j], upper)[j] - x[j]
-                               for j in range(x.size)])
+            actual = np.array(
+                [
+                    np.minimum(x + np.eye(x.size)[j] * steps[j], upper)[j] - x[j]
+                    for j in range(x.size)
+                ]
+            )
             actual = np.where(actual == 0.0, -steps, actual)
             return np.asarray(((r[1:] - r[0]).T / actual) / np.sqrt(r.shape[1]), dtype=float)
 
         result = scipy.optimize.least_squares(
-            residual, x0, jac=jacobian, bounds=(lower, upper), method="trf",
-            max_nfev=max_iterations, x_scale=width / 4,
+            residual,
+            x0,
+            jac=jacobian,
+            bounds=(lower, upper),
+            method="trf",
+            max_nfev=max_iterations,
+            x_scale=width / 4,
         )
         theta = _from_search(model, result.x)
         train_cost = float(2.0 * result.cost)
+        uncertainty = _uncertainty(model, result.jac, theta, train_cost)
     else:
         theta = np.zeros(0)
         r = model.residuals(ds.train, theta[None, :], FIT_SPAN, FIT_DECIMATION)[0]
         train_cost = float(np.mean(r**2))
+        uncertainty = None
     nrmse = model.channel_nrmse(ds.held_out, theta)
     return Fit(
         effects=model.names,
@@ -218,4 +243,28 @@ def fit(model: Model, start: FloatArray | None = None, max_iterations: int = 12)
         train_cost=train_cost,
         held_out_cost=float(np.mean([v**2 for v in nrmse.values()])),
         held_out_nrmse=nrmse,
+        uncertainty=uncertainty,
     )
+
+
+INDEPENDENT_SAMPLES_PER_SECOND = 60.0
+"""Independent samples per second and channel of a 30 Hz low-passed signal (Nyquist)."""
+
+
+def _uncertainty(
+    model: Model, jac: FloatArray, theta: FloatArray, cost: float
+) -> FloatArray | None:
+    """Linearised one-sigma uncertainty of ``theta`` from the fit's Jacobian.
+
+    The residual samples are correlated (30 Hz low-pass), so the count that sets the
+    covariance is the independent one, about 60 per second and channel.
+    """
+    span = sum(min(w.end - w.start, FIT_SPAN) for w in model.dataset.train)
+    independent = max(INDEPENDENT_SAMPLES_PER_SECOND * span * len(OUTPUT_CHANNELS), 2.0)
+    try:
+        covariance = np.linalg.inv(jac.T @ jac) * cost / independent
+    except np.linalg.LinAlgError:
+        return None
+    sigma = np.sqrt(np.clip(np.diag(covariance), 0.0, None))
+    logarithmic = np.array([log for *_, log in model.parameters()], dtype=bool)
+    return np.asarray(np.where(logarithmic, theta * sigma, sigma), dtype=float)
