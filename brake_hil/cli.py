@@ -119,6 +119,46 @@ def run_simulate(
     return out
 
 
+def run_diagnose(recording_path: Path, rig_path: Path, out: Path) -> dict[str, object]:
+    """``brake-hil diagnose``: find, name and model the physics the LTI model left out."""
+    from tqdm import tqdm
+
+    from brake_hil.core.diagnosis.diagnose import diagnose
+    from brake_hil.report.diagnosis_report import write_report
+
+    rig = load_rig(rig_path)
+    recording = read_recording(
+        recording_path, required=(MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS)
+    )
+    with tqdm(total=16, desc="diagnose", unit="step", file=sys.stderr,
+              disable=not sys.stderr.isatty()) as bar:
+
+        def progress(message: str) -> None:
+            bar.set_postfix_str(message)
+            bar.update(1)
+
+        diagnosis = diagnose(recording, rig, progress)
+        bar.n = bar.total
+        bar.refresh()
+    result = diagnosis.as_dict()
+    out.mkdir(parents=True, exist_ok=True)
+    _write_json(out / "diagnosis.json", result)
+    model = {
+        "format": "brake_hil/improved_model/1",
+        "rig": str(rig_path),
+        "calibration": diagnosis.calibration.multipliers,
+        "effects": list(diagnosis.improved.effects),
+        "parameters": diagnosis.improved.parameters(),
+    }
+    _write_json(out / "improved_model.json", model)
+    page = write_report(diagnosis, out)
+    verdict = ", ".join(diagnosis.effects) or "none (the calibrated LTI model suffices)"
+    print(f"verdict: {verdict} (confidence {diagnosis.confidence:.2f})")
+    print(diagnosis.explanation)
+    print(f"report: {page}")
+    return result
+
+
 def _write_json(path: Path | None, result: dict[str, object]) -> None:
     if path is None:
         return
@@ -142,6 +182,10 @@ def build_parser() -> argparse.ArgumentParser:
     chz.add_argument("recording", type=Path)
     chz.add_argument("--rig", type=Path, required=True)
     chz.add_argument("--json", type=Path)
+    dgn = commands.add_parser("diagnose", help="find and model the physics the model left out")
+    dgn.add_argument("recording", type=Path)
+    dgn.add_argument("--rig", type=Path, required=True)
+    dgn.add_argument("--out", type=Path, required=True, help="folder for diagnosis.json etc.")
     sim = commands.add_parser("simulate", help="write a recording of the LTI model")
     sim.add_argument("--rig", type=Path, required=True, help="the rig to simulate (truth)")
     sim.add_argument("--out", type=Path, required=True, help="new rosbag2 directory")
@@ -165,6 +209,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             run_compare(args.recording, args.rig, args.json, args.plot)
         elif args.command == "characterize":
             run_characterize(args.recording, args.rig, args.json)
+        elif args.command == "diagnose":
+            run_diagnose(args.recording, args.rig, args.out)
         elif args.command == "simulate":
             run_simulate(args.rig, args.out, args.max_pressure, args.pulsing_seconds, args.seed)
     except BrakeHilError as err:
