@@ -13,7 +13,6 @@ from brake_hil.core.diagnosis.engine import ModelSpec, simulate_batch
 from brake_hil.core.excitation import pulsing_profile
 from brake_hil.core.parameters import chamber_volumes, derive_parameters, seal_properties
 from brake_hil.core.rig import Rig
-
 from test.conftest import PROJECT
 
 INTERFACE = PROJECT.parent / "shared" / "docs" / "interface.md"
