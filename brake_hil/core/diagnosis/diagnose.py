@@ -34,7 +34,7 @@ from brake_hil.topics import OUTPUT_CHANNELS
 
 ACCEPT_RATIO = 2.0
 """A candidate must cut the held-out mean squared error at least this much."""
-PAIR_RATIO = 1.6
+PAIR_RATIO = 2.0
 """A second effect must cut it again at least this much."""
 PARAMETER_PENALTY = 0.05
 """Log-ratio charged per fitted parameter when ranking (prefers the simpler of equals)."""
@@ -174,7 +174,12 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
                 continue
             say(f"fitting {' + '.join(names)}")
             pair_model = Model(calibration, [BY_NAME[n] for n in names], dataset)
-            pair = fit(pair_model, start=np.concatenate([best.theta, other.theta]))
+            start = np.concatenate([
+                best.theta[: len(best.theta) - len(calibration.sigmas)],
+                other.theta[: len(other.theta) - len(calibration.sigmas)],
+                best.theta[len(best.theta) - len(calibration.sigmas) :],
+            ])
+            pair = fit(pair_model, start=start)
             hypotheses.append(pair)
             if (
                 chosen.held_out_cost / max(pair.held_out_cost, 1e-15) >= PAIR_RATIO
@@ -223,8 +228,8 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
 
 
 def _shares_physics(names: tuple[str, str]) -> bool:
-    """Pairs that are one physics twice (a Jenkins seal with and without asymmetry)."""
-    return set(names) == {"seal_stick_slip", "seal_groove_asymmetry"}
+    """Pairs that are one physics twice (none among the current candidates)."""
+    return names[0] == names[1]
 
 
 def _explain(baseline: Fit, chosen: Fit, evidence: Evidence) -> str:

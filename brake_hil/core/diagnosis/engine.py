@@ -53,6 +53,7 @@ STATE_SCALE = {
 RELATIVE_FORCE, CALIPER_FORCE, LINE_DROP = range(3)
 INPUTS = 3
 STUCK, SLIPPING = 0, 1
+APPLY, RELEASE = 0, 1
 
 
 @dataclass(frozen=True)
@@ -71,8 +72,12 @@ class ModelSpec:
     hose_compliance: FloatArray | None = None  # m^3/Pa, node between pipe and hose
     share_slope: FloatArray | None = None  # -, share s = s0 + s1 (p_b - p_ref) / p_ref
     air_volume: FloatArray | None = None  # m^3, isothermal air volume at gauge zero
-    drift_rate: FloatArray | None = None  # 1/s, relative drift of line and seal terms
+    drift_rate: FloatArray | None = None  # 1/s, relative drift of the line resistance
+    seal_drift_rate: FloatArray | None = None  # 1/s, relative drift of k_eh and c_eh
+    drift_reference: FloatArray | None = None  # s, recording time at which drift is zero
     output_delay: FloatArray | None = None  # (B, 3) s, acquisition delay per channel
+    stiffness_asymmetry: FloatArray | None = None  # -, k_eh (1 - a) apply side, (1 + a) release
+    relaxation_time: FloatArray | None = None  # s, creep of the seal's relaxed position
 
     @property
     def batch(self) -> int:
@@ -88,6 +93,7 @@ class ModelSpec:
             self.share_slope,
             self.air_volume,
             self.drift_rate,
+            self.stiffness_asymmetry,
         )
         return all(term is None for term in nonlinear)
 
@@ -200,13 +206,20 @@ def _tables(
     p = spec.params[b]
     hose = None if spec.hose_compliance is None else float(spec.hose_compliance[b])
     spring = 0.0 if spec.jenkins_spring is None else float(spec.jenkins_spring[b])
-    modes = (STUCK, SLIPPING) if spec.has_jenkins else (STUCK,)
+    states = (STUCK, SLIPPING) if spec.has_jenkins else (STUCK,)
+    sides = (APPLY, RELEASE) if spec.stiffness_asymmetry is not None else (APPLY,)
+    asymmetry = 0.0 if spec.stiffness_asymmetry is None else float(spec.stiffness_asymmetry[b])
+    modes = [(state, side) for state in states for side in sides]
     entries: list[list[list[Discrete]]] = []
     start: _Plant | None = None
     for block in range(blocks):
-        drift = 1.0
+        line_drift = seal_drift = 1.0
         if spec.drift_rate is not None:
-            drift = max(1.0 + float(spec.drift_rate[b]) * (block + 0.5) * block_s, 0.05)
+            reference = 0.0 if spec.drift_reference is None else float(spec.drift_reference[b])
+            elapsed = (block + 0.5) * block_s - reference
+            line_drift = max(1.0 + float(spec.drift_rate[b]) * elapsed, 0.05)
+            if spec.seal_drift_rate is not None:
+                seal_drift = max(1.0 + float(spec.seal_drift_rate[b]) * elapsed, 0.05)
         row = []
         for pressure in pressures:
             compliance = p.bore_compliance
@@ -214,13 +227,14 @@ def _tables(
                 absolute = max(float(pressure), 0.0) + ATMOSPHERE
                 compliance += float(spec.air_volume[b]) * ATMOSPHERE / absolute**2
             by_mode = []
-            for mode in modes:
+            for state, side in modes:
+                side_factor = 1.0 - asymmetry if side == APPLY else 1.0 + asymmetry
                 plant = _plant(
                     p,
-                    relative_stiffness=drift * p.effective_hydraulic_stiffness
-                    + (spring if mode == STUCK else 0.0),
-                    relative_damping=drift * p.effective_hydraulic_damping,
-                    line_resistance=drift * p.line_resistance,
+                    relative_stiffness=seal_drift * side_factor * p.effective_hydraulic_stiffness
+                    + (spring if state == STUCK else 0.0),
+                    relative_damping=seal_drift * p.effective_hydraulic_damping,
+                    line_resistance=line_drift * p.line_resistance,
                     bore_compliance=compliance,
                     hose_compliance=hose,
                 )
@@ -312,6 +326,16 @@ def simulate_batch(
     i_q = i.get("Q_p", i["Q_h"])
 
     rows = np.arange(batch)
+    asymmetric = spec.stiffness_asymmetry is not None
+    sides = 2 if asymmetric else 1
+    side = np.zeros(batch, dtype=int)
+    seal_start = z[:, i_xp] * s[i_xp] - z[:, i_xc] * s[i_xc]
+    relaxed = seal_start.copy()  # the seal's relaxed position, creeping toward x_p - x_c
+    side_stiffness = np.array([p.effective_hydraulic_stiffness for p in spec.params])
+    asymmetry_array = (spec.stiffness_asymmetry if spec.stiffness_asymmetry is not None
+                       else np.zeros(batch))
+    relaxation = (spec.relaxation_time if spec.relaxation_time is not None
+                  else np.full(batch, 1.0))
     level = np.zeros(batch, dtype=int)
     mode = np.zeros(batch, dtype=int)
     offset = np.zeros(batch)  # slider position x_p - x_c at which the stuck spring is relaxed
@@ -331,6 +355,7 @@ def simulate_batch(
         p_b = z[:, i_pb] * s[i_pb]
         if air:
             level = np.clip(np.searchsorted(grid, p_b), 0, pressure_levels - 1)
+        explicit[:, RELATIVE_FORCE] = 0.0
         if jenkins:
             assert spring is not None
             threshold_extra = 0.0 if bore is None else bore * np.abs(p_b * z[:, i_xc] * s[i_xc])
@@ -345,7 +370,11 @@ def simulate_batch(
             explicit[:, CALIPER_FORCE] = (
                 -bore_area * slope * p_b * (p_b - REFERENCE_PRESSURE) / REFERENCE_PRESSURE
             )
-        index = (rows, block, level, mode)
+        if asymmetric:
+            # Seal force k x_s - a k |x_s - x_r|: the tables carry k (1 -+ a) x_s, this the rest.
+            sign = np.where(side == APPLY, -1.0, 1.0)
+            explicit[:, RELATIVE_FORCE] += sign * asymmetry_array * side_stiffness * relaxed
+        index = (rows, block, level, mode * sides + side)
         z = (
             np.einsum("bij,bj->bi", phi[index], z)
             + g_prev[index] * u[k - 1]
@@ -366,5 +395,9 @@ def simulate_batch(
             offset = np.where(stick, seal - direction * held / spring, offset)
             direction = np.where(start_apply, 1.0, np.where(start_release, -1.0, direction))
             mode = np.where(start_apply | start_release, SLIPPING, np.where(stick, STUCK, mode))
+        if asymmetric:
+            seal = z[:, i_xp] * s[i_xp] - z[:, i_xc] * s[i_xc]
+            relaxed = relaxed + (seal - relaxed) * sample_time / relaxation
+            side = np.where(seal >= relaxed, APPLY, RELEASE)
         out[:, :, k] = np.einsum("bij,bj->bi", out_c, z)
     return _delay_outputs(spec, out, sample_time)

@@ -16,7 +16,7 @@ import numpy as np
 import numpy.typing as npt
 import scipy.optimize
 
-from brake_hil.core.diagnosis.calibration import Calibration
+from brake_hil.core.diagnosis.calibration import MODEL_ERROR, Calibration, apply_multipliers
 from brake_hil.core.diagnosis.candidates.base import Candidate, Context, Draft
 from brake_hil.core.diagnosis.dataset import Dataset, Window
 from brake_hil.core.diagnosis.engine import ModelSpec, simulate_batch
@@ -30,6 +30,8 @@ FIT_SPAN = 1.6
 """Longest stretch of a training window used in a fit (s): eight 5 Hz cycles."""
 FIT_DECIMATION = 2
 """Every n-th sample of a window enters the fit's residuals."""
+PRIOR_SPAN = 3.0
+"""Calibration multipliers may move this many prior sigmas in a candidate's fit."""
 
 
 @dataclass(frozen=True)
@@ -73,23 +75,49 @@ class Model:
         """Effect names."""
         return tuple(c.name for c in self.candidates)
 
+    @property
+    def effect_size(self) -> int:
+        """Number of the candidates' own parameters (theta's leading columns)."""
+        return sum(self.sizes)
+
     def parameters(self) -> list[tuple[str, str, float, float, bool]]:
-        """``(name, unit, low, high, logarithmic)`` of every parameter, in theta order."""
-        return [
+        """``(name, unit, low, high, logarithmic)`` of every parameter, in theta order.
+
+        The candidates' parameters come first, then the calibration's multipliers, which are
+        re-fitted with every candidate under the same prior (a candidate must not be credited
+        with what a parameter within its tolerance explains).
+        """
+        own = [
             (p.name, p.unit, p.low, p.high, p.logarithmic)
             for c in self.candidates
             for p in c.parameters
         ]
+        sigmas = self.calibration.sigmas
+        multipliers = [
+            (f"calibration.{name}", "x", float(np.exp(-PRIOR_SPAN * sigma)),
+             float(np.exp(PRIOR_SPAN * sigma)), True)
+            for name, sigma in sigmas.items()
+        ]
+        return own + multipliers
+
+    def prior_sigmas(self) -> FloatArray:
+        """Log-sigma of each multiplier column (after the candidates' own columns)."""
+        return np.array(list(self.calibration.sigmas.values()))
 
     def start(self) -> FloatArray:
-        """Start parameters, concatenated."""
+        """Start parameters: candidates' own, then the calibrated multipliers."""
         parts = [c.start(self.context) for c in self.candidates]
-        return np.concatenate(parts) if parts else np.zeros(0)
+        parts.append(np.array(list(self.calibration.multipliers.values())))
+        return np.concatenate(parts)
 
     def spec(self, window: Window, theta: FloatArray) -> ModelSpec:
         """The simulator spec of every row of ``theta`` (B, P) for one window."""
-        base = self.calibration.parameters(window.mean_pressure)
-        draft = Draft([base] * theta.shape[0])
+        names = list(self.calibration.sigmas)
+        rig = self.calibration.rig
+        draft = Draft([
+            apply_multipliers(rig, window.mean_pressure, dict(zip(names, row)))
+            for row in theta[:, self.effect_size :]
+        ])
         column = 0
         for candidate, size in zip(self.candidates, self.sizes):
             candidate.fill(draft, theta[:, column : column + size], self.context)
@@ -149,19 +177,20 @@ def make_context(calibration: Calibration, dataset: Dataset) -> Context:
     rig = calibration.rig
     window = dataset.segments[len(dataset.segments) // 2]
     params = calibration.parameters(window.mean_pressure)
-    pressure_amplitude = 0.5 * float(np.ptp(dataset.pressure[dataset.mask((window,))]))
-    admittance = 1.0 / np.hypot(
-        params.line_resistance, 2 * np.pi * rig.excitation_hz * params.line_inertance
+    bore_amplitude = 0.5 * float(np.ptp(dataset.measured["p_b"][dataset.mask((window,))]))
+    # Fluid volume taken per pascal: the chamber's compliance and the caliper's give (eq. 21d
+    # with the quasi-static caliper of eq. 21f).
+    volume_per_pascal = params.bore_compliance + params.piston_area * params.bore_area / (
+        params.caliper_stiffness + params.effective_hydraulic_stiffness
     )
-    # Flow amplitude of the line driven by the input's swing against a stiff bore: an upper
-    # bound that sets the scale of the orifice term only.
-    flow = max(pressure_amplitude * admittance, 1e-9)
+    flow = max(2 * np.pi * rig.excitation_hz * volume_per_pascal * bore_amplitude, 1e-9)
     return Context(
         seal=seal_properties(rig),
         bore_volume=chamber_volumes(rig)[1],
         flow_amplitude=flow,
         transducer_distance=rig.transducer_distance,
         bore_friction_coefficient=rig.bore_friction_coefficient,
+        time_reference=float(np.mean([0.5 * (w.start + w.end) for w in dataset.train])),
     )
 
 
@@ -173,67 +202,57 @@ def _from_search(model: Model, x: FloatArray) -> FloatArray:
     return np.array([np.exp(v) if log else v for v, (*_, log) in zip(x, model.parameters())])
 
 
-def fit(model: Model, start: FloatArray | None = None, max_iterations: int = 12) -> Fit:
+def fit(model: Model, start: FloatArray | None = None, max_iterations: int = 15) -> Fit:
     """Bounded least squares on the training windows; score on the held-out windows.
 
-    The Jacobian's columns are simulated in one batch with the point itself.
+    The objective is the calibration's: data residuals over ``MODEL_ERROR`` plus the prior
+    on the calibration multipliers. The Jacobian's columns are simulated in one batch with
+    the point itself.
     """
     ds = model.dataset
     specs = model.parameters()
-    if specs:
-        lower = np.array([np.log(lo) if log else lo for _, _, lo, _, log in specs])
-        upper = np.array([np.log(hi) if log else hi for _, _, _, hi, log in specs])
-        x0 = np.clip(_to_search(model, model.start() if start is None else start), lower, upper)
-        width = upper - lower
-        steps = 1e-3 * np.maximum(width, 1e-6)
-        cache: dict[bytes, FloatArray] = {}
+    own = model.effect_size
+    sigma = model.prior_sigmas()
+    lower = np.array([np.log(lo) if log else lo for _, _, lo, _, log in specs])
+    upper = np.array([np.log(hi) if log else hi for _, _, _, hi, log in specs])
+    x0 = np.clip(_to_search(model, model.start() if start is None else start), lower, upper)
+    width = upper - lower
+    steps = 1e-3 * np.maximum(width, 1e-6)
+    cache: dict[bytes, FloatArray] = {}
 
-        def batch(x: FloatArray) -> FloatArray:
-            rows = [x] + [
-                np.minimum(x + np.eye(x.size)[j] * steps[j], upper) for j in range(x.size)
-            ]
-            thetas = np.array([_from_search(model, r) for r in rows])
-            return model.residuals(ds.train, thetas, FIT_SPAN, FIT_DECIMATION)
+    def rows(x: FloatArray) -> FloatArray:
+        points = [x] + [_step(x, j, steps[j], upper) for j in range(x.size)]
+        return np.array(points)
 
-        def evaluate(x: FloatArray) -> FloatArray:
-            key = x.tobytes()
-            if key not in cache:
-                cache.clear()
-                cache[key] = batch(x)
-            return cache[key]
+    def objective(points: FloatArray) -> FloatArray:
+        thetas = np.array([_from_search(model, r) for r in points])
+        data = model.residuals(ds.train, thetas, FIT_SPAN, FIT_DECIMATION)
+        data = data / (MODEL_ERROR * np.sqrt(data.shape[1]))
+        return np.hstack([data, points[:, own:] / sigma])
 
-        def residual(x: FloatArray) -> FloatArray:
-            r = evaluate(x)[0]
-            return np.asarray(r / np.sqrt(r.size), dtype=float)
+    def evaluate(x: FloatArray) -> FloatArray:
+        key = x.tobytes()
+        if key not in cache:
+            cache.clear()
+            cache[key] = objective(rows(x))
+        return cache[key]
 
-        def jacobian(x: FloatArray) -> FloatArray:
-            r = evaluate(x)
-            actual = np.array(
-                [
-                    np.minimum(x + np.eye(x.size)[j] * steps[j], upper)[j] - x[j]
-                    for j in range(x.size)
-                ]
-            )
-            actual = np.where(actual == 0.0, -steps, actual)
-            return np.asarray(((r[1:] - r[0]).T / actual) / np.sqrt(r.shape[1]), dtype=float)
+    def residual(x: FloatArray) -> FloatArray:
+        return np.asarray(evaluate(x)[0], dtype=float)
 
-        result = scipy.optimize.least_squares(
-            residual,
-            x0,
-            jac=jacobian,
-            bounds=(lower, upper),
-            method="trf",
-            max_nfev=max_iterations,
-            x_scale=width / 4,
-        )
-        theta = _from_search(model, result.x)
-        train_cost = float(2.0 * result.cost)
-        uncertainty = _uncertainty(model, result.jac, theta, train_cost)
-    else:
-        theta = np.zeros(0)
-        r = model.residuals(ds.train, theta[None, :], FIT_SPAN, FIT_DECIMATION)[0]
-        train_cost = float(np.mean(r**2))
-        uncertainty = None
+    def jacobian(x: FloatArray) -> FloatArray:
+        r = evaluate(x)
+        actual = np.array([_step(x, j, steps[j], upper)[j] - x[j] for j in range(x.size)])
+        return np.asarray((r[1:] - r[0]).T / actual, dtype=float)
+
+    result = scipy.optimize.least_squares(
+        residual, x0, jac=jacobian, bounds=(lower, upper), method="trf",
+        max_nfev=max_iterations, x_scale=width / 4,
+    )
+    theta = _from_search(model, result.x)
+    data_part = result.fun[: result.fun.size - sigma.size] * MODEL_ERROR
+    train_cost = float(np.sum(data_part**2))
+    uncertainty = _uncertainty(model, result.jac, theta, train_cost, data_part.size)
     nrmse = model.channel_nrmse(ds.held_out, theta)
     return Fit(
         effects=model.names,
@@ -247,22 +266,32 @@ def fit(model: Model, start: FloatArray | None = None, max_iterations: int = 12)
     )
 
 
+def _step(x: FloatArray, j: int, size: float, upper: FloatArray) -> FloatArray:
+    """``x`` moved by ``size`` along ``j``, backwards where the upper bound is in the way."""
+    moved = x.copy()
+    moved[j] = x[j] + size if x[j] + size <= upper[j] else x[j] - size
+    return moved
+
+
 INDEPENDENT_SAMPLES_PER_SECOND = 60.0
 """Independent samples per second and channel of a 30 Hz low-passed signal (Nyquist)."""
 
 
 def _uncertainty(
-    model: Model, jac: FloatArray, theta: FloatArray, cost: float
+    model: Model, jac: FloatArray, theta: FloatArray, cost: float, samples: int
 ) -> FloatArray | None:
     """Linearised one-sigma uncertainty of ``theta`` from the fit's Jacobian.
 
-    The residual samples are correlated (30 Hz low-pass), so the count that sets the
-    covariance is the independent one, about 60 per second and channel.
+    The Jacobian is of residuals scaled by ``MODEL_ERROR``; the misfit actually left is
+    ``cost`` (mean squared), and the residual samples are correlated (30 Hz low-pass), so
+    the count that sets the covariance is the independent one, about 60 per second and
+    channel.
     """
     span = sum(min(w.end - w.start, FIT_SPAN) for w in model.dataset.train)
     independent = max(INDEPENDENT_SAMPLES_PER_SECOND * span * len(OUTPUT_CHANNELS), 2.0)
+    inflation = max(cost / MODEL_ERROR**2, 1e-6) * max(samples / independent, 1.0)
     try:
-        covariance = np.linalg.inv(jac.T @ jac) * cost / independent
+        covariance = np.linalg.inv(jac.T @ jac) * inflation
     except np.linalg.LinAlgError:
         return None
     sigma = np.sqrt(np.clip(np.diag(covariance), 0.0, None))

@@ -44,6 +44,7 @@ def _context(rig: Rig) -> Context:
         flow_amplitude=2e-6,
         transducer_distance=rig.transducer_distance,
         bore_friction_coefficient=rig.bore_friction_coefficient,
+        time_reference=1.0,
     )
 
 

@@ -43,6 +43,7 @@ class Context:
     flow_amplitude: float  # |Q_h| amplitude of the calibrated LTI model, m^3/s
     transducer_distance: float  # l_c, m
     bore_friction_coefficient: float  # nominal mu_fb
+    time_reference: float  # s, middle of the training data (where drifts are zero)
 
 
 @dataclass
