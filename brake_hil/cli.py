@@ -20,6 +20,7 @@ from brake_hil.core.comparison import compare, predict
 from brake_hil.core.excitation import pulsing_profile
 from brake_hil.core.measurement import SENSORS, measure
 from brake_hil.core.parameters import derive_parameters
+from brake_hil.core.regression import run_regression
 from brake_hil.core.rig import load_rig
 from brake_hil.errors import BrakeHilError
 from brake_hil.io.recording_reader import read_recording
@@ -143,14 +144,8 @@ def run_diagnose(recording_path: Path, rig_path: Path, out: Path) -> dict[str, o
     result = diagnosis.as_dict()
     out.mkdir(parents=True, exist_ok=True)
     _write_json(out / "diagnosis.json", result)
-    model = {
-        "format": "brake_hil/improved_model/1",
-        "rig": str(rig_path),
-        "calibration": diagnosis.calibration.multipliers,
-        "effects": list(diagnosis.improved.effects),
-        "parameters": diagnosis.improved.parameters(),
-    }
-    _write_json(out / "improved_model.json", model)
+    improved = diagnosis.improved_model(rig_path).save(out / "improved_model.json")
+    print(f"improved model written to {improved} (caliper_model loads it)")
     page = write_report(diagnosis, out)
     verdict = ", ".join(diagnosis.effects) or "none (the calibrated LTI model suffices)"
     print(f"verdict: {verdict} (confidence {diagnosis.confidence:.2f})")
@@ -198,6 +193,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sim.add_argument("--pulsing-seconds", type=float, default=5.0)
     sim.add_argument("--seed", type=int, default=0)
+    reg = commands.add_parser("regress", help="replay recordings through the model vs a baseline")
+    reg.add_argument("recordings", type=Path, nargs="+")
+    reg.add_argument("--baseline", type=Path, required=True, help="baseline JSON")
+    reg.add_argument("--model", type=Path, help="model file (default: the baseline's)")
+    reg.add_argument("--update", action="store_true", help="rewrite the baseline")
+    reg.add_argument("--jobs", type=int, help="parallel replays (default: one per CPU)")
     return parser
 
 
@@ -213,6 +214,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             run_diagnose(args.recording, args.rig, args.out)
         elif args.command == "simulate":
             run_simulate(args.rig, args.out, args.max_pressure, args.pulsing_seconds, args.seed)
+        elif args.command == "regress":
+            return run_regression(
+                args.recordings, args.baseline, read_recording, args.model, args.update, args.jobs
+            )
     except BrakeHilError as err:
         print(f"brake-hil {args.command}: error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT

@@ -17,6 +17,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 import math
+from pathlib import Path
 
 import numpy as np
 
@@ -27,6 +28,7 @@ from brake_hil.core.diagnosis.candidates import BY_NAME, CANDIDATES
 from brake_hil.core.diagnosis.dataset import Dataset, prepare
 from brake_hil.core.diagnosis.evidence import Evidence, collect
 from brake_hil.core.diagnosis.fitting import Fit, Model, fit
+from brake_hil.core.diagnosis.improved_model import ImprovedModel
 from brake_hil.core.recording import Recording
 from brake_hil.core.rig import Rig
 from brake_hil.errors import BrakeHilError
@@ -59,6 +61,23 @@ class Diagnosis:
     baseline_metrics: dict[str, dict[str, float]]
     improved_metrics: dict[str, dict[str, float]]
     dataset: Dataset
+
+    def improved_model(self, rig_path: Path) -> ImprovedModel:
+        """The improved model in the form the caliper-model node loads."""
+        model = Model(self.calibration, [BY_NAME[e] for e in self.improved.effects], self.dataset)
+        parameters = self.improved.parameters()
+        prefix = "calibration."
+        return ImprovedModel(
+            rig_path=rig_path.resolve(),
+            multipliers={
+                k[len(prefix) :]: v for k, v in parameters.items() if k.startswith(prefix)
+            },
+            effects=self.improved.effects,
+            parameters={k: v for k, v in parameters.items() if not k.startswith(prefix)},
+            flow_amplitude=model.context.flow_amplitude,
+            time_reference=model.context.time_reference,
+            pressure_ceiling=model.pressure_ceiling,
+        )
 
     def as_dict(self) -> dict[str, object]:
         """JSON of interface.md's ``diagnosis.json`` (with more keys)."""
@@ -174,11 +193,13 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
                 continue
             say(f"fitting {' + '.join(names)}")
             pair_model = Model(calibration, [BY_NAME[n] for n in names], dataset)
-            start = np.concatenate([
-                best.theta[: len(best.theta) - len(calibration.sigmas)],
-                other.theta[: len(other.theta) - len(calibration.sigmas)],
-                best.theta[len(best.theta) - len(calibration.sigmas) :],
-            ])
+            start = np.concatenate(
+                [
+                    best.theta[: len(best.theta) - len(calibration.sigmas)],
+                    other.theta[: len(other.theta) - len(calibration.sigmas)],
+                    best.theta[len(best.theta) - len(calibration.sigmas) :],
+                ]
+            )
             pair = fit(pair_model, start=start)
             hypotheses.append(pair)
             if (

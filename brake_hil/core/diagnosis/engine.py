@@ -289,6 +289,167 @@ def _delay_outputs(spec: ModelSpec, out: FloatArray, sample_time: float) -> Floa
     return out
 
 
+class Integrator:
+    """The candidate models' state, advanced one sample at a time for a batch of sets.
+
+    :func:`simulate_batch` runs it over a recording; :class:`CandidateStepper` runs one set
+    live, sample by sample; both give the same numbers for the same inputs.
+    """
+
+    def __init__(
+        self,
+        spec: ModelSpec,
+        first_pressure: float,
+        sample_time: float,
+        pressure_ceiling: float,
+        duration: float,
+        pressure_levels: int = 16,
+        block_s: float = 1.0,
+        start_time: float = 0.0,
+    ) -> None:
+        batch = spec.batch
+        self.spec, self.sample_time, self.block_s = spec, sample_time, block_s
+        self.start_time, self.levels = start_time, pressure_levels
+        self.air = spec.air_volume is not None
+        self.drifting = spec.drift_rate is not None
+        self.jenkins = spec.has_jenkins
+        self.asymmetric = spec.stiffness_asymmetry is not None
+        self.grid = (
+            np.linspace(0.0, max(pressure_ceiling, 1e5), pressure_levels)
+            if self.air
+            else np.zeros(1)
+        )
+        self.blocks = int(np.ceil((start_time + duration) / block_s)) + 1 if self.drifting else 1
+        tables = [
+            _tables(spec, b, self.grid, self.blocks, block_s, sample_time) for b in range(batch)
+        ]
+        self.phi = np.stack([t.phi for t in tables])
+        self.g_prev = np.stack([t.g_prev for t in tables])
+        self.g_now = np.stack([t.g_now for t in tables])
+        self.g_w = np.stack([t.g_w for t in tables])
+        self.out_c = np.stack([t.plant.C for t in tables])
+        self.z = np.stack(
+            [-np.linalg.solve(t.plant.A, t.plant.B * first_pressure) for t in tables]
+        )
+        plant = tables[0].plant
+        self.scale, index = plant.scale, plant.index
+        self.i_pb, self.i_xp, self.i_vp, self.i_xc, self.i_vc = (
+            index[k] for k in ("p_b", "x_p", "v_p", "x_c", "v_c")
+        )
+        self.i_q = index.get("Q_p", index["Q_h"])
+        self.rows = np.arange(batch)
+        self.sides = 2 if self.asymmetric else 1
+        self.side = np.zeros(batch, dtype=int)
+        self.relaxed = self._seal()  # the seal's relaxed position, creeping toward x_p - x_c
+        self.side_stiffness = np.array([p.effective_hydraulic_stiffness for p in spec.params])
+        self.asymmetry = (
+            spec.stiffness_asymmetry if spec.stiffness_asymmetry is not None else np.zeros(batch)
+        )
+        self.relaxation = (
+            spec.relaxation_time if spec.relaxation_time is not None else np.full(batch, 1.0)
+        )
+        self.level = np.zeros(batch, dtype=int)
+        self.mode = np.zeros(batch, dtype=int)
+        self.offset = np.zeros(batch)  # x_p - x_c at which the stuck Jenkins spring is relaxed
+        self.direction = np.zeros(batch)  # +1 slipping while applying, -1 while releasing
+        self.explicit = np.zeros((batch, INPUTS))
+        self.apply_f = (
+            spec.apply_threshold if spec.apply_threshold is not None else np.zeros(batch)
+        )
+        self.release_f = (
+            spec.release_threshold if spec.release_threshold is not None else self.apply_f
+        )
+        self.bore_area = np.array([p.bore_area for p in spec.params])
+        self.step_index = 0
+
+    def _value(self, state: int) -> FloatArray:
+        return np.asarray(self.z[:, state] * self.scale[state], dtype=float)
+
+    def _seal(self) -> FloatArray:
+        return self._value(self.i_xp) - self._value(self.i_xc)
+
+    def outputs(self) -> FloatArray:
+        """Current outputs (B, 3): p_b (Pa), F_k (N), x_c (m)."""
+        return np.asarray(np.einsum("bij,bj->bi", self.out_c, self.z), dtype=float)
+
+    def advance(self, previous_pressure: float, pressure: float) -> FloatArray:
+        """Advance one sample (inputs in Pa, linear between them); return the outputs."""
+        spec, explicit = self.spec, self.explicit
+        self.step_index += 1
+        block = 0
+        if self.drifting:
+            now = self.start_time + self.step_index * self.sample_time
+            block = min(int(now / self.block_s), self.blocks - 1)
+        p_b = self._value(self.i_pb)
+        if self.air:
+            self.level = np.clip(np.searchsorted(self.grid, p_b), 0, self.levels - 1)
+        explicit[:, RELATIVE_FORCE] = 0.0
+        if self.jenkins:
+            assert spec.jenkins_spring is not None
+            extra = self._bore_threshold(p_b)
+            slip_force = np.where(self.direction > 0, self.apply_f, self.release_f) + extra
+            explicit[:, RELATIVE_FORCE] = np.where(
+                self.mode == STUCK,
+                spec.jenkins_spring * self.offset,
+                -self.direction * slip_force,
+            )
+        if spec.orifice_coefficient is not None:
+            q = self._value(self.i_q)
+            explicit[:, LINE_DROP] = spec.orifice_coefficient * q * np.abs(q)
+        if spec.share_slope is not None:
+            explicit[:, CALIPER_FORCE] = (
+                -self.bore_area
+                * spec.share_slope
+                * p_b
+                * (p_b - REFERENCE_PRESSURE)
+                / REFERENCE_PRESSURE
+            )
+        if self.asymmetric:
+            # Seal force k x_s - a k |x_s - x_r|: the tables carry k (1 -+ a) x_s, this the rest.
+            sign = np.where(self.side == APPLY, -1.0, 1.0)
+            explicit[:, RELATIVE_FORCE] += (
+                sign * self.asymmetry * self.side_stiffness * self.relaxed
+            )
+        index = (self.rows, block, self.level, self.mode * self.sides + self.side)
+        self.z = (
+            np.einsum("bij,bj->bi", self.phi[index], self.z)
+            + self.g_prev[index] * previous_pressure
+            + self.g_now[index] * pressure
+            + np.einsum("bij,bj->bi", self.g_w[index], explicit)
+        )
+        if self.jenkins:
+            self._update_slider()
+        if self.asymmetric:
+            seal = self._seal()
+            self.relaxed = (
+                self.relaxed + (seal - self.relaxed) * self.sample_time / self.relaxation
+            )
+            self.side = np.where(seal >= self.relaxed, APPLY, RELEASE)
+        return self.outputs()
+
+    def _bore_threshold(self, p_b: FloatArray) -> FloatArray | float:
+        if self.spec.bore_friction is None:
+            return 0.0
+        return np.asarray(self.spec.bore_friction * np.abs(p_b * self._value(self.i_xc)))
+
+    def _update_slider(self) -> None:
+        """Stick-slip transitions of the Jenkins element after a step (return mapping)."""
+        spring = self.spec.jenkins_spring
+        assert spring is not None
+        seal = self._seal()
+        velocity = self._value(self.i_vp) - self._value(self.i_vc)
+        extra = self._bore_threshold(self._value(self.i_pb))
+        mode, direction = self.mode, self.direction
+        trial = spring * (seal - self.offset)
+        start_apply = (mode == STUCK) & (trial > self.apply_f + extra)
+        start_release = (mode == STUCK) & (trial < -(self.release_f + extra))
+        stick = (mode == SLIPPING) & (direction * velocity <= 0.0)
+        held = np.where(direction > 0, self.apply_f, self.release_f) + extra
+        self.offset = np.where(stick, seal - direction * held / spring, self.offset)
+        self.direction = np.where(start_apply, 1.0, np.where(start_release, -1.0, direction))
+        self.mode = np.where(start_apply | start_release, SLIPPING, np.where(stick, STUCK, mode))
+
+
 def simulate_batch(
     spec: ModelSpec,
     pressure: FloatArray,
@@ -296,108 +457,30 @@ def simulate_batch(
     pressure_levels: int = 16,
     block_s: float = 1.0,
     start_time: float = 0.0,
+    pressure_ceiling: float | None = None,
 ) -> FloatArray:
     """Outputs ``(B, 3, N)`` (p_b Pa, F_k N, x_c m) of every parameter set of ``spec``
     driven by ``pressure`` (Pa, one sample per ``sample_time`` s), from the equilibrium at
     the first sample with every slider relaxed. ``start_time`` (s) is the first sample's time
-    in the recording (the drift schedule runs on recording time).
+    in the recording (the drift schedule runs on recording time); the entrained-air schedule
+    spans 0 to ``pressure_ceiling`` (Pa; default 1.2 times the input's maximum).
     """
     u = np.asarray(pressure, dtype=float)
     if spec.is_linear:
         return _simulate_linear(spec, u, sample_time)
-    steps, batch = u.size, spec.batch
-    air = spec.air_volume is not None
-    drifting = spec.drift_rate is not None
-    jenkins = spec.has_jenkins
-    grid = (
-        np.linspace(0.0, max(float(u.max()), 1e5) * 1.2, pressure_levels) if air else np.zeros(1)
+    ceiling = 1.2 * float(u.max()) if pressure_ceiling is None else pressure_ceiling
+    integrator = Integrator(
+        spec,
+        float(u[0]),
+        sample_time,
+        ceiling,
+        u.size * sample_time,
+        pressure_levels,
+        block_s,
+        start_time,
     )
-    blocks = int(np.ceil((start_time + steps * sample_time) / block_s)) if drifting else 1
-    tables = [_tables(spec, b, grid, blocks, block_s, sample_time) for b in range(batch)]
-    phi = np.stack([t.phi for t in tables])
-    g_prev = np.stack([t.g_prev for t in tables])
-    g_now = np.stack([t.g_now for t in tables])
-    g_w = np.stack([t.g_w for t in tables])
-    plant = tables[0].plant
-    out_c = np.stack([t.plant.C for t in tables])
-    z = np.stack([-np.linalg.solve(t.plant.A, t.plant.B * u[0]) for t in tables])
-    s, i = plant.scale, plant.index
-    i_pb, i_xp, i_vp, i_xc, i_vc = (i[k] for k in ("p_b", "x_p", "v_p", "x_c", "v_c"))
-    i_q = i.get("Q_p", i["Q_h"])
-
-    rows = np.arange(batch)
-    asymmetric = spec.stiffness_asymmetry is not None
-    sides = 2 if asymmetric else 1
-    side = np.zeros(batch, dtype=int)
-    seal_start = z[:, i_xp] * s[i_xp] - z[:, i_xc] * s[i_xc]
-    relaxed = seal_start.copy()  # the seal's relaxed position, creeping toward x_p - x_c
-    side_stiffness = np.array([p.effective_hydraulic_stiffness for p in spec.params])
-    asymmetry_array = (spec.stiffness_asymmetry if spec.stiffness_asymmetry is not None
-                       else np.zeros(batch))
-    relaxation = (spec.relaxation_time if spec.relaxation_time is not None
-                  else np.full(batch, 1.0))
-    level = np.zeros(batch, dtype=int)
-    mode = np.zeros(batch, dtype=int)
-    offset = np.zeros(batch)  # slider position x_p - x_c at which the stuck spring is relaxed
-    direction = np.zeros(batch)  # +1 slipping while applying, -1 while releasing
-    explicit = np.zeros((batch, INPUTS))
-    spring = spec.jenkins_spring
-    apply_f = spec.apply_threshold if spec.apply_threshold is not None else np.zeros(batch)
-    release_f = spec.release_threshold if spec.release_threshold is not None else apply_f
-    bore = spec.bore_friction
-    orifice = spec.orifice_coefficient
-    slope = spec.share_slope
-    bore_area = np.array([p.bore_area for p in spec.params])
-    out = np.empty((batch, 3, steps))
-    out[:, :, 0] = np.einsum("bij,bj->bi", out_c, z)
-    for k in range(1, steps):
-        block = min(int((start_time + k * sample_time) / block_s), blocks - 1) if drifting else 0
-        p_b = z[:, i_pb] * s[i_pb]
-        if air:
-            level = np.clip(np.searchsorted(grid, p_b), 0, pressure_levels - 1)
-        explicit[:, RELATIVE_FORCE] = 0.0
-        if jenkins:
-            assert spring is not None
-            threshold_extra = 0.0 if bore is None else bore * np.abs(p_b * z[:, i_xc] * s[i_xc])
-            slip_force = np.where(direction > 0, apply_f, release_f) + threshold_extra
-            explicit[:, RELATIVE_FORCE] = np.where(
-                mode == STUCK, spring * offset, -direction * slip_force
-            )
-        if orifice is not None:
-            q = z[:, i_q] * s[i_q]
-            explicit[:, LINE_DROP] = orifice * q * np.abs(q)
-        if slope is not None:
-            explicit[:, CALIPER_FORCE] = (
-                -bore_area * slope * p_b * (p_b - REFERENCE_PRESSURE) / REFERENCE_PRESSURE
-            )
-        if asymmetric:
-            # Seal force k x_s - a k |x_s - x_r|: the tables carry k (1 -+ a) x_s, this the rest.
-            sign = np.where(side == APPLY, -1.0, 1.0)
-            explicit[:, RELATIVE_FORCE] += sign * asymmetry_array * side_stiffness * relaxed
-        index = (rows, block, level, mode * sides + side)
-        z = (
-            np.einsum("bij,bj->bi", phi[index], z)
-            + g_prev[index] * u[k - 1]
-            + g_now[index] * u[k]
-            + np.einsum("bij,bj->bi", g_w[index], explicit)
-        )
-        if jenkins:
-            assert spring is not None
-            seal = z[:, i_xp] * s[i_xp] - z[:, i_xc] * s[i_xc]
-            velocity = z[:, i_vp] * s[i_vp] - z[:, i_vc] * s[i_vc]
-            p_b = z[:, i_pb] * s[i_pb]
-            extra = 0.0 if bore is None else bore * np.abs(p_b * z[:, i_xc] * s[i_xc])
-            trial = spring * (seal - offset)
-            start_apply = (mode == STUCK) & (trial > apply_f + extra)
-            start_release = (mode == STUCK) & (trial < -(release_f + extra))
-            stick = (mode == SLIPPING) & (direction * velocity <= 0.0)
-            held = np.where(direction > 0, apply_f, release_f) + extra
-            offset = np.where(stick, seal - direction * held / spring, offset)
-            direction = np.where(start_apply, 1.0, np.where(start_release, -1.0, direction))
-            mode = np.where(start_apply | start_release, SLIPPING, np.where(stick, STUCK, mode))
-        if asymmetric:
-            seal = z[:, i_xp] * s[i_xp] - z[:, i_xc] * s[i_xc]
-            relaxed = relaxed + (seal - relaxed) * sample_time / relaxation
-            side = np.where(seal >= relaxed, APPLY, RELEASE)
-        out[:, :, k] = np.einsum("bij,bj->bi", out_c, z)
+    out = np.empty((spec.batch, 3, u.size))
+    out[:, :, 0] = integrator.outputs()
+    for k in range(1, u.size):
+        out[:, :, k] = integrator.advance(u[k - 1], u[k])
     return _delay_outputs(spec, out, sample_time)

@@ -69,6 +69,7 @@ class Model:
         self.dataset = dataset
         self.context = make_context(calibration, dataset)
         self.sizes = [len(c.parameters) for c in self.candidates]
+        self.pressure_ceiling = 1.2 * float(np.max(dataset.pressure))
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -138,6 +139,7 @@ class Model:
             ds.pressure[first:last],
             ds.sample_time,
             start_time=float(ds.time[first]),
+            pressure_ceiling=self.pressure_ceiling,
         )
         return outputs[:, :, inside], np.arange(first, last)[inside]
 
