@@ -15,7 +15,6 @@ from brake_hil.core.diagnosis.improved_model import (
     read_improved_model,
 )
 from brake_hil.core.excitation import pulsing_profile
-
 from test.conftest import CONFIG
 
 MULTIPLIERS = {
