@@ -1,0 +1,167 @@
+"""Score the diagnosis blind on labelled concealed-effect cases.
+
+This is the only module that reads labels. It hands the diagnosis each case's recording and
+nominal rig file (never the label, the case's name or its metadata), collects the verdicts,
+and only then opens the labels to score them:
+
+* top-1 accuracy on single-effect cases (the verdict's first effect is the label) and how
+  often the verdict is exactly the label;
+* exact-set accuracy on pairs;
+* false-positive rate on null cases (parameter error only): any verdict but none;
+* ``unexplained`` recall on cases whose physics no candidate models;
+* held-out NRMSE improvement on the mismatched channel (baseline / improved, the channel
+  with the worst baseline NRMSE) on correctly diagnosed cases;
+* seconds per recording, and the confidence's reliability (accuracy per confidence bin).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import asdict, dataclass
+import json
+from pathlib import Path
+import statistics
+import time
+
+from brake_hil.core.diagnosis.diagnose import diagnose
+from brake_hil.core.rig import load_rig
+from brake_hil.errors import BrakeHilError
+from brake_hil.io.recording_reader import read_recording
+from brake_hil.topics import MASTER_CYLINDER_PRESSURE, MEASURED_OUTPUTS
+
+CONFIDENCE_BINS = ((0.0, 0.5), (0.5, 0.7), (0.7, 0.9), (0.9, 1.01))
+
+
+@dataclass(frozen=True)
+class CaseResult:
+    """The diagnosis of one case, before its label is read."""
+
+    case: str
+    effects: tuple[str, ...]
+    confidence: float
+    seconds: float
+    baseline_nrmse: dict[str, float]
+    improved_nrmse: dict[str, float]
+    error: str = ""
+
+
+def diagnose_case(case_dir: Path) -> CaseResult:
+    """Diagnose ``case_dir/recording`` against ``case_dir/rig.yaml``; nothing else is read."""
+    began = time.perf_counter()
+    try:
+        rig = load_rig(case_dir / "rig.yaml")
+        recording = read_recording(
+            case_dir / "recording", required=(MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS)
+        )
+        result = diagnose(recording, rig)
+    except BrakeHilError as err:
+        return CaseResult(case_dir.name, (), 0.0, time.perf_counter() - began, {}, {}, str(err))
+    return CaseResult(
+        case=case_dir.name,
+        effects=result.effects,
+        confidence=result.confidence,
+        seconds=time.perf_counter() - began,
+        baseline_nrmse=result.baseline.held_out_nrmse,
+        improved_nrmse=result.improved.held_out_nrmse,
+    )
+
+
+def run_cases(
+    case_dirs: Iterable[Path],
+    workers: int = 2,
+    progress: Callable[[CaseResult], None] | None = None,
+) -> list[CaseResult]:
+    """Diagnose every case, ``workers`` at a time."""
+    dirs = sorted(case_dirs)
+    results: list[CaseResult] = []
+    if workers <= 1:
+        for case_dir in dirs:
+            results.append(diagnose_case(case_dir))
+            if progress:
+                progress(results[-1])
+        return results
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        for result in pool.map(diagnose_case, dirs):
+            results.append(result)
+            if progress:
+                progress(result)
+    return results
+
+
+def read_labels(path: Path) -> dict[str, list[str]]:
+    """Labels ``{case: [effect, ...]}`` (``[]`` for a null case, ``["unexplained"]``)."""
+    try:
+        document = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, json.JSONDecodeError) as err:
+        raise BrakeHilError(f"{path}: cannot read labels: {err}") from err
+    return {str(case): list(entry["effects"]) for case, entry in document.items()}
+
+
+def score(results: list[CaseResult], labels: dict[str, list[str]]) -> dict[str, object]:
+    """The benchmark's figures (see the module docstring)."""
+    singles, pairs, nulls, unexplained = [], [], [], []
+    for result in results:
+        label = labels[result.case]
+        if label == ["unexplained"]:
+            unexplained.append((result, label))
+        elif not label:
+            nulls.append((result, label))
+        elif len(label) == 1:
+            singles.append((result, label))
+        else:
+            pairs.append((result, label))
+
+    def share(items: list[tuple[CaseResult, list[str]]], test: Callable[..., bool]) -> float:
+        return sum(test(r, lab) for r, lab in items) / len(items) if items else float("nan")
+
+    def correct(result: CaseResult, label: list[str]) -> bool:
+        return set(result.effects) == set(label)
+
+    improvements = []
+    for result, label in singles + pairs:
+        if correct(result, label) and result.improved_nrmse:
+            worst = max(result.baseline_nrmse, key=lambda k: result.baseline_nrmse[k])
+            improvements.append(
+                result.baseline_nrmse[worst] / max(result.improved_nrmse[worst], 1e-12)
+            )
+    reliability = []
+    for low, high in CONFIDENCE_BINS:
+        inside = [(r, labels[r.case]) for r in results if low <= r.confidence < high]
+        if inside:
+            reliability.append(
+                {
+                    "confidence": [low, min(high, 1.0)],
+                    "cases": len(inside),
+                    "mean_confidence": statistics.fmean(r.confidence for r, _ in inside),
+                    "accuracy": share(inside, correct),
+                }
+            )
+    seconds = [r.seconds for r in results]
+    return {
+        "cases": len(results),
+        "single_effect_cases": len(singles),
+        "top1_accuracy_single": share(
+            singles, lambda r, lab: bool(r.effects) and r.effects[0] == lab[0]
+        ),
+        "exact_accuracy_single": share(singles, correct),
+        "pair_cases": len(pairs),
+        "exact_set_accuracy_pairs": share(pairs, correct),
+        "null_cases": len(nulls),
+        "false_positive_rate_null": share(nulls, lambda r, lab: bool(r.effects)),
+        "unexplained_cases": len(unexplained),
+        "unexplained_recall": share(unexplained, lambda r, lab: r.effects == ("unexplained",)),
+        "held_out_nrmse_improvement_median": (
+            statistics.median(improvements) if improvements else float("nan")
+        ),
+        "held_out_nrmse_improvement_at_least_3x": (
+            sum(i >= 3.0 for i in improvements) / len(improvements)
+            if improvements
+            else float("nan")
+        ),
+        "seconds_per_recording_mean": statistics.fmean(seconds) if seconds else float("nan"),
+        "seconds_per_recording_max": max(seconds) if seconds else float("nan"),
+        "reliability": reliability,
+        "errors": [r.case + ": " + r.error for r in results if r.error],
+        "per_case": [{**asdict(r), "label": labels[r.case]} for r in results],
+    }
