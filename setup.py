@@ -33,6 +33,7 @@ setup(
         "mcap-ros2-support>=0.5",
         "rosbags>=0.10",
         "python-can>=4.3",
+        "pyserial>=3.5",  # python-can's slcan interface (CAN over a serial link)
         "cantools>=39",
         "matplotlib>=3.7",
         "tqdm>=4.60",

@@ -14,6 +14,12 @@ CORE_MODULES = [
     "brake_hil.core.comparison",
     "brake_hil.io.recording_reader",
     "brake_hil.io.recording_writer",
+    "brake_hil.io.mcap_recorder",
+    "brake_hil.io.can_daq",
+    "brake_hil.core.diagnosis.diagnose",
+    "brake_hil.core.diagnosis.improved_model",
+    "brake_hil.virtual_rig.simulator",
+    "brake_hil.scoring",
     "brake_hil.cli",
 ]
 

@@ -1,0 +1,528 @@
+"""Stream serialised messages into a rosbag2 MCAP directory that survives ``kill -9`` (ROS-free).
+
+The directory is what ``ros2 bag record -s mcap`` writes: ``metadata.yaml`` (rosbag2 version 9)
+and ``<name>_0.mcap``, ``<name>_1.mcap``, ... (profile ``ros2``, one ``ros2msg`` schema per
+type, channels with ``offered_qos_profiles`` and ``topic_type_hash``, CDR messages as given, in
+zstd chunks with CRCs, then indexes, statistics and a ``rosbag2`` metadata record when a file
+is closed). A new file starts when the current one reaches ``max_file_bytes`` (checked at each
+chunk, so a file may exceed it by one chunk) or spans ``max_file_duration_s`` of log time.
+
+Crash safety. The ``mcap`` writer writes into a memory buffer; a finished chunk is committed
+to the file together with a temporary MCAP footer (no summary) by one ``pwrite``, at the place
+of the previous temporary footer. The file on disk therefore always ends after a whole chunk
+with a valid footer: after ``kill -9`` every file is a complete MCAP without summary, which
+rosbags and ``mcap`` read by scanning. Only the chunk in memory is lost (at most
+``chunk_bytes`` of messages, or ``flush()``'s interval when the caller flushes on a timer).
+``metadata.yaml`` is rewritten (write-then-rename) after every commit with the counts now on
+disk and every file so far, so a killed recording opens as it stands. A kill between the
+chunk's ``pwrite`` and the rename (microseconds) leaves counts one chunk short;
+:func:`recover_metadata` rewrites ``metadata.yaml`` from the files, as ``ros2 bag reindex``
+does.
+
+Messages are written as given (no decoding); log time is whatever the caller passes (a
+recorder passes the receive time; ``header.stamp`` stays inside the message).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+import os
+from pathlib import Path
+import re
+import struct
+from types import TracebackType
+from typing import Any, Final, NamedTuple, Self
+
+from mcap.writer import CompressionType
+from mcap.writer import Writer as McapWriter
+from rosbags.interfaces import Qos
+from rosbags.rosbag2 import Reader
+from rosbags.rosbag2.metadata import dump_qos_v9, parse_qos
+from rosbags.typesys import Stores, get_typestore
+from rosbags.typesys.store import Typestore
+import yaml
+
+from brake_hil import __version__
+
+METADATA_VERSION: Final = 9
+"""rosbag2 metadata version written (Kilted)."""
+MCAP_MAGIC: Final = b"\x89MCAP0\r\n"
+_FOOTER: Final = b"\x02" + struct.pack("<QQQI", 20, 0, 0, 0) + MCAP_MAGIC
+"""An MCAP footer without summary (summary_start 0, summary_offset_start 0, crc 0) + magic."""
+
+try:  # libyaml when present: metadata.yaml is rewritten at every chunk
+    _Dumper: Any = yaml.CSafeDumper
+except AttributeError:  # pragma: no cover - PyYAML without libyaml
+    _Dumper = yaml.SafeDumper
+
+
+class TopicInfo(NamedTuple):
+    """One recorded topic, as ``metadata.yaml`` and the MCAP channel describe it."""
+
+    name: str
+    msgtype: str  # e.g. "sensor_msgs/msg/FluidPressure"
+    msgdef: str  # ros2msg text (rosbags' generate_msgdef format)
+    type_hash: str  # RIHS01 type description hash
+    offered_qos_profiles: tuple[Qos, ...]
+    serialization_format: str = "cdr"
+
+
+class FileInfo(NamedTuple):
+    """One storage file's share of the recording (committed messages only)."""
+
+    path: Path
+    message_count: int
+    start_ns: int  # first log time (ns); 0 when empty
+    end_ns: int  # last log time (ns); 0 when empty
+    size_bytes: int
+
+
+@dataclass
+class _Counts:
+    """Message counts and log-time span of a set of messages."""
+
+    per_topic: dict[int, int] = field(default_factory=dict)
+    start_ns: int | None = None
+    end_ns: int | None = None
+
+    @property
+    def total(self) -> int:
+        return sum(self.per_topic.values())
+
+    def add(self, topic: int, log_time_ns: int, count: int = 1) -> None:
+        self.per_topic[topic] = self.per_topic.get(topic, 0) + count
+        self.start_ns = log_time_ns if self.start_ns is None else min(self.start_ns, log_time_ns)
+        self.end_ns = log_time_ns if self.end_ns is None else max(self.end_ns, log_time_ns)
+
+    def merge(self, other: _Counts) -> None:
+        for topic, count in other.per_topic.items():
+            self.per_topic[topic] = self.per_topic.get(topic, 0) + count
+        if other.start_ns is not None and other.end_ns is not None:
+            self.start_ns = min(other.start_ns, self.start_ns or other.start_ns)
+            self.end_ns = max(other.end_ns, self.end_ns or other.end_ns)
+
+
+class _CommitStream:
+    """The byte stream the ``mcap`` writer writes to: buffered until :meth:`commit`."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self._fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+        self._committed = 0  # bytes of real content on disk (the temporary footer follows)
+        self._pending = bytearray()
+
+    @property
+    def pending(self) -> int:
+        return len(self._pending)
+
+    @property
+    def size(self) -> int:
+        """Committed bytes (the temporary footer not counted)."""
+        return self._committed
+
+    def write(self, data: bytes | bytearray | memoryview) -> int:
+        self._pending += data
+        return len(data)
+
+    def tell(self) -> int:
+        return self._committed + len(self._pending)
+
+    def flush(self) -> None:
+        """No-op: content reaches the file only through :meth:`commit`."""
+
+    def commit(self, final: bool = False) -> None:
+        """Write the pending bytes (plus a temporary footer unless ``final``) in one pwrite."""
+        data = bytes(self._pending) if final else bytes(self._pending) + _FOOTER
+        view, offset = memoryview(data), self._committed
+        while view:
+            written = os.pwrite(self._fd, view, offset)
+            view, offset = view[written:], offset + written
+        self._committed += len(self._pending)
+        self._pending.clear()
+        if final:
+            os.ftruncate(self._fd, self._committed)
+
+    def close(self) -> None:
+        os.close(self._fd)
+
+
+class _OpenFile:
+    """One ``.mcap`` being written."""
+
+    def __init__(self, path: Path, chunk_bytes: int, compression: CompressionType) -> None:
+        self.path = path
+        self.stream = _CommitStream(path)
+        self.writer = McapWriter(
+            self.stream,  # type: ignore[arg-type]
+            chunk_size=chunk_bytes,
+            compression=compression,
+            enable_crcs=True,
+        )
+        self.writer.start(profile="ros2", library=f"brake_hil {__version__}")
+        self.stream.commit()  # header + temporary footer: a valid empty MCAP from the start
+        self.schema_ids: dict[str, int] = {}
+        self.channel_ids: dict[int, int] = {}  # topic handle -> MCAP channel id
+        self.committed = _Counts()
+        self.pending = _Counts()
+        self.first_log_ns: int | None = None
+
+    def add_topic(self, handle: int, topic: TopicInfo, qos_text: str) -> None:
+        if (schema := self.schema_ids.get(topic.msgtype)) is None:
+            schema = self.writer.register_schema(topic.msgtype, "ros2msg", topic.msgdef.encode())
+            self.schema_ids[topic.msgtype] = schema
+        metadata = {"offered_qos_profiles": qos_text, "topic_type_hash": topic.type_hash}
+        self.channel_ids[handle] = self.writer.register_channel(
+            topic.name, topic.serialization_format, schema, metadata
+        )
+
+    def info(self) -> FileInfo:
+        counts = self.committed
+        return FileInfo(
+            self.path, counts.total, counts.start_ns or 0, counts.end_ns or 0, self.stream.size
+        )
+
+
+def _qos_text(profiles: Sequence[Qos]) -> str:
+    """``offered_qos_profiles`` of an MCAP channel: the v9 list as YAML text."""
+    return str(yaml.dump(dump_qos_v9(list(profiles)), Dumper=_Dumper, sort_keys=False)).strip()
+
+
+def _bag_metadata(
+    files: Sequence[FileInfo],
+    topics: Sequence[TopicInfo],
+    counts: Mapping[int, int],
+    custom_data: Mapping[str, str],
+) -> dict[str, Any]:
+    """The ``rosbag2_bagfile_information`` mapping of ``metadata.yaml``."""
+    spans = [(f.start_ns, f.end_ns) for f in files if f.message_count]
+    start = min((s for s, _ in spans), default=0)
+    end = max((e for _, e in spans), default=0)
+    return {
+        "version": METADATA_VERSION,
+        "storage_identifier": "mcap",
+        "duration": {"nanoseconds": end - start},
+        "starting_time": {"nanoseconds_since_epoch": start},
+        "message_count": sum(f.message_count for f in files),
+        "topics_with_message_count": [
+            {
+                "topic_metadata": {
+                    "name": topic.name,
+                    "type": topic.msgtype,
+                    "serialization_format": topic.serialization_format,
+                    "offered_qos_profiles": dump_qos_v9(list(topic.offered_qos_profiles)),
+                    "type_description_hash": topic.type_hash,
+                },
+                "message_count": counts.get(handle, 0),
+            }
+            for handle, topic in enumerate(topics)
+        ],
+        "compression_format": "",
+        "compression_mode": "",
+        "relative_file_paths": [f.path.name for f in files],
+        "files": [
+            {
+                "path": f.path.name,
+                "starting_time": {"nanoseconds_since_epoch": f.start_ns},
+                "duration": {"nanoseconds": f.end_ns - f.start_ns},
+                "message_count": f.message_count,
+            }
+            for f in files
+        ],
+        "custom_data": dict(custom_data) or None,
+        "ros_distro": "kilted",
+    }
+
+
+def _dump(metadata: Mapping[str, Any]) -> str:
+    return str(yaml.dump(metadata, Dumper=_Dumper, default_flow_style=False, sort_keys=False))
+
+
+def _replace_text(path: Path, text: str) -> Path:
+    """Write ``text`` beside ``path`` (to be renamed over it); returns the temporary file."""
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(text, encoding="utf8")
+    return tmp
+
+
+class McapRecorder:
+    """Write serialised messages into a new rosbag2 MCAP directory, as they arrive.
+
+    Args:
+        path: the directory to create; must not exist. Files are ``<dir name>_<i>.mcap``.
+        max_file_bytes: start a new file once the current one holds this many bytes
+            (checked per chunk); None: no size limit.
+        max_file_duration_s: start a new file before a message whose log time is this many
+            seconds after the file's first message; None: no duration limit.
+        chunk_bytes: uncompressed size of an MCAP chunk (bytes); a chunk is the unit that
+            reaches the disk, so at most this much is lost by ``kill -9``.
+        compression: ``"zstd"``, ``"lz4"`` or ``"none"`` (chunk compression).
+        custom_data: ``custom_data`` of ``metadata.yaml`` (strings).
+        typestore: where message definitions and hashes come from (default ROS 2 Kilted).
+
+    Raises:
+        FileExistsError: ``path`` exists.
+        ValueError: a limit that is not positive, an unknown compression.
+    """
+
+    def __init__(
+        self,
+        path: Path | str,
+        *,
+        max_file_bytes: int | None = None,
+        max_file_duration_s: float | None = None,
+        chunk_bytes: int = 1 << 20,
+        compression: str = "zstd",
+        custom_data: Mapping[str, str] | None = None,
+        typestore: Typestore | None = None,
+    ) -> None:
+        self.path = Path(path)
+        for name, limit in (
+            ("max_file_bytes", max_file_bytes),
+            ("max_file_duration_s", max_file_duration_s),
+            ("chunk_bytes", chunk_bytes),
+        ):
+            if limit is not None and not limit > 0:
+                raise ValueError(f"{name} must be > 0, got {limit}")
+        compressions = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4}
+        compressions["none"] = CompressionType.NONE
+        if compression not in compressions:
+            raise ValueError(f"compression must be one of {sorted(compressions)}")
+        self._compression = compressions[compression]
+        self._max_bytes = max_file_bytes
+        self._max_duration_ns = (
+            None if max_file_duration_s is None else round(max_file_duration_s * 1e9)
+        )
+        self._chunk_bytes = chunk_bytes
+        self._custom_data = dict(custom_data or {})
+        self._typestore = typestore
+        if self.path.exists():
+            raise FileExistsError(f"{self.path}: exists already, not overwriting a recording")
+        self.path.mkdir(parents=True)
+        self.topics: list[TopicInfo] = []
+        """Registered topics; a topic's handle is its index."""
+        self._qos_texts: list[str] = []
+        self._closed_files: list[FileInfo] = []
+        self._counts: dict[int, int] = {}  # committed messages per topic handle, all files
+        self._file: _OpenFile | None = None
+        self._open_next_file()
+
+    # -- set-up --------------------------------------------------------------------------
+
+    def _typestore_or_default(self) -> Typestore:
+        if self._typestore is None:
+            self._typestore = get_typestore(Stores.ROS2_KILTED)
+        return self._typestore
+
+    def add_topic(
+        self,
+        name: str,
+        msgtype: str,
+        *,
+        offered_qos_profiles: Sequence[Qos] = (),
+        msgdef: str | None = None,
+        type_hash: str | None = None,
+        serialization_format: str = "cdr",
+    ) -> int:
+        """Register a topic; returns its handle for :meth:`write`.
+
+        ``msgdef`` (ros2msg text) and ``type_hash`` (RIHS01) default to the typestore's.
+
+        Raises:
+            ValueError: the topic is registered already, or the typestore does not know
+                ``msgtype`` and no ``msgdef``/``type_hash`` are given.
+        """
+        if any(t.name == name for t in self.topics):
+            raise ValueError(f"{self.path}: topic {name} is registered already")
+        if msgdef is None or type_hash is None:
+            store = self._typestore_or_default()
+            if msgtype not in store.fielddefs:
+                msg = f"{self.path}: {name}: message type {msgtype} is not in the typestore"
+                raise ValueError(msg)
+            if msgdef is None:
+                msgdef = store.generate_msgdef(msgtype, ros_version=2)[0]
+            type_hash = type_hash if type_hash is not None else store.hash_rihs01(msgtype)
+        topic = TopicInfo(
+            name, msgtype, msgdef, type_hash, tuple(offered_qos_profiles), serialization_format
+        )
+        handle = len(self.topics)
+        self.topics.append(topic)
+        self._qos_texts.append(_qos_text(topic.offered_qos_profiles))
+        assert self._file is not None
+        self._file.add_topic(handle, topic, self._qos_texts[handle])
+        self._write_metadata()
+        return handle
+
+    # -- writing -------------------------------------------------------------------------
+
+    def write(self, handle: int, log_time_ns: int, data: bytes) -> None:
+        """Append one serialised message of topic ``handle``; ``log_time_ns`` is its log time
+        (ns since the epoch; also written as publish time)."""
+        current = self._file
+        if current is None:
+            raise ValueError(f"{self.path}: the recording is closed")
+        if current.first_log_ns is None:
+            current.first_log_ns = log_time_ns
+        elif (
+            self._max_duration_ns is not None
+            and log_time_ns - current.first_log_ns >= self._max_duration_ns
+        ):
+            self._split()
+            current = self._file
+            assert current is not None
+            current.first_log_ns = log_time_ns
+        current.writer.add_message(current.channel_ids[handle], log_time_ns, data, log_time_ns)
+        current.pending.add(handle, log_time_ns)
+        if current.stream.pending:  # the writer finished a chunk
+            self._commit()
+
+    def flush(self) -> None:
+        """Commit the chunk in progress now (call on a timer to bound what ``kill -9`` loses)."""
+        if self._file is not None and self._file.pending.total:
+            self._file.writer.flush()  # type: ignore[no-untyped-call]
+            self._commit()
+
+    def _commit(self) -> None:
+        """Put the finished chunk on disk and the counts it holds into ``metadata.yaml``."""
+        current = self._file
+        assert current is not None
+        current.committed.merge(current.pending)
+        for handle, count in current.pending.per_topic.items():
+            self._counts[handle] = self._counts.get(handle, 0) + count
+        current.pending = _Counts()
+        tmp = self._prepare_metadata(size=current.stream.tell())
+        current.stream.commit()
+        tmp.replace(self.path / "metadata.yaml")
+        if self._max_bytes is not None and current.stream.size >= self._max_bytes:
+            self._split()
+
+    def _split(self) -> None:
+        """Close the current file and start the next."""
+        self._finish_file()
+        self._open_next_file()
+
+    def _open_next_file(self) -> None:
+        index = len(self._closed_files)
+        path = self.path / f"{self.path.name}_{index}.mcap"
+        self._file = _OpenFile(path, self._chunk_bytes, self._compression)
+        for handle, topic in enumerate(self.topics):
+            self._file.add_topic(handle, topic, self._qos_texts[handle])
+        self._write_metadata()
+
+    def _finish_file(self) -> None:
+        current, self._file = self._file, None
+        assert current is not None
+        current.writer.flush()  # type: ignore[no-untyped-call]
+        current.committed.merge(current.pending)
+        for handle, count in current.pending.per_topic.items():
+            self._counts[handle] = self._counts.get(handle, 0) + count
+        current.pending = _Counts()
+        files = [*self._closed_files, current.info()]
+        serialized = _dump(_bag_metadata(files, self.topics, self._counts, self._custom_data))
+        current.writer.add_metadata("rosbag2", {"serialized_metadata": serialized})
+        current.writer.finish()  # type: ignore[no-untyped-call]
+        current.stream.commit(final=True)
+        current.stream.close()
+        self._closed_files.append(current.info())
+
+    # -- metadata.yaml -------------------------------------------------------------------
+
+    def files(self) -> list[FileInfo]:
+        """Every file so far, with its committed messages (the open one last)."""
+        return [*self._closed_files, *([self._file.info()] if self._file else [])]
+
+    def _prepare_metadata(self, size: int | None = None) -> Path:
+        files = self.files()
+        if size is not None and self._file is not None:
+            files[-1] = files[-1]._replace(size_bytes=size)
+        document = {
+            "rosbag2_bagfile_information": _bag_metadata(
+                files, self.topics, self._counts, self._custom_data
+            )
+        }
+        return _replace_text(self.path / "metadata.yaml", _dump(document))
+
+    def _write_metadata(self) -> None:
+        self._prepare_metadata().replace(self.path / "metadata.yaml")
+
+    @property
+    def message_count(self) -> int:
+        """Messages written so far (committed or not)."""
+        pending = self._file.pending.total if self._file else 0
+        return sum(self._counts.values()) + pending
+
+    # -- closing -------------------------------------------------------------------------
+
+    def close(self) -> None:
+        """Finish the open file (summary, indexes) and write the final ``metadata.yaml``."""
+        if self._file is None:
+            return
+        self._finish_file()
+        self._write_metadata()
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        self.close()
+
+
+_FILE_INDEX = re.compile(r"_(\d+)\.mcap$")
+
+
+def recover_metadata(path: Path | str) -> Path:
+    """Rewrite ``metadata.yaml`` of a rosbag2 MCAP directory from its ``.mcap`` files.
+
+    For a recording whose writer was killed: counts, spans and the file list are taken from
+    what the files hold (every file the recorder leaves is a valid MCAP, see the module
+    doc). Topic QoS and type hashes come from the files' channels.
+
+    Returns:
+        The path of the new ``metadata.yaml``.
+
+    Raises:
+        FileNotFoundError: no ``.mcap`` file in ``path``.
+        rosbags.rosbag2.ReaderError: a file cannot be read.
+    """
+    path = Path(path)
+
+    def order(p: Path) -> tuple[int, str]:
+        match = _FILE_INDEX.search(p.name)
+        return (int(match.group(1)) if match else -1, p.name)
+
+    mcaps = sorted(path.glob("*.mcap"), key=order)
+    if not mcaps:
+        raise FileNotFoundError(f"{path}: no .mcap files to recover")
+    topics: dict[str, TopicInfo] = {}
+    counts: dict[str, int] = {}
+    files: list[FileInfo] = []
+    for mcap_path in mcaps:
+        with Reader(mcap_path) as reader:
+            for connection in reader.connections:
+                qos = getattr(connection.ext, "offered_qos_profiles", [])
+                topics.setdefault(
+                    connection.topic,
+                    TopicInfo(
+                        connection.topic,
+                        connection.msgtype,
+                        connection.msgdef.data,
+                        connection.digest,
+                        tuple(parse_qos(qos) if isinstance(qos, str) else qos),
+                        getattr(connection.ext, "serialization_format", "cdr"),
+                    ),
+                )
+                counts[connection.topic] = counts.get(connection.topic, 0) + connection.msgcount
+            count = reader.message_count
+            start, end = (reader.start_time, reader.end_time - 1) if count else (0, 0)
+            files.append(FileInfo(mcap_path, count, start, end, mcap_path.stat().st_size))
+    ordered = list(topics.values())
+    by_handle = {i: counts[t.name] for i, t in enumerate(ordered)}
+    document = {"rosbag2_bagfile_information": _bag_metadata(files, ordered, by_handle, {})}
+    target = path / "metadata.yaml"
+    _replace_text(target, _dump(document)).replace(target)
+    return target

@@ -1,0 +1,350 @@
+"""Rig emulator node: a virtual rig run played out in real time, as the real rig presents it.
+
+The run is computed first (:func:`precompute_run`), then played at absolute 1 kHz deadlines
+(:class:`~brake_hil.core.realtime.DeadlineLoop`): sample ``k`` is due at ``t0 + k T``; a late
+wake-up sends the samples that fell due back to back (none is skipped, as a DAQ buffers).
+Outputs (``output``):
+
+``topics``
+    The measured signals on the contract topics (``/brake/master_cylinder/pressure``,
+    ``/brake/bore/pressure``, ``/brake/block/force``, ``/brake/caliper/displacement``, and
+    ``/brake/air/pressure`` when the run has ``p_a``), ``header.stamp`` = acquisition time
+    ``t0 + k T`` on the wall clock.
+``can``
+    The DAQ's frames of ``config/brake_rig.dbc`` (:class:`~brake_hil.io.can_daq.RigFrameCodec`),
+    ``sample_counter = k``. ``can_interface: slcan_pty`` (default) makes a pseudo-terminal
+    slcan adapter (:class:`~brake_hil.io.can_daq.SlcanPty`) and links it at
+    ``can_link_path``, for a pressure source in another process
+    (``can_interface: slcan``, ``can_channel: <can_link_path>``); any other value is a
+    python-can interface with ``can_channel``/``can_bitrate`` (e.g. ``socketcan`` on a rig PC).
+``both``
+    Both at once.
+
+Parameters (``config/rig_emulator.yaml``): ``rig_file`` (the truth rig; default
+``config/rig_default.yaml``), ``simulator`` (``virtual_rig``: the higher-fidelity simulator
+with ``effects``, e.g. ``["seal_stick_slip"]``; ``lti``: the seed's LTI model), ``effects``,
+``max_pressures`` (Pa), ``ramp_s``, ``pulsing_s``, ``pulsing_hz``, ``seed`` (sensor noise),
+``loop`` (replay the run forever, counter and stamps running on; false: exit at the end),
+``output``, ``can_interface``, ``can_channel``, ``can_bitrate``, ``can_link_path``,
+``dbc_file``, ``frame_id``, ``wait_for_subscribers`` (start once every sample topic has this
+many subscribers; 0: at once), ``wait_timeout_s`` (start anyway after this wait),
+``start_delay_s`` (then wait this long before the first sample), ``diagnostics_period_s``.
+Health and timing go to ``/diagnostics``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+import functools
+import sys
+import threading
+import time
+from typing import Any, NamedTuple
+
+from diagnostic_msgs.msg import DiagnosticArray
+import numpy as np
+import rclpy
+from rclpy.node import Node
+
+from brake_hil.core.excitation import pulsing_profile
+from brake_hil.core.lti_model import ModelInput, discretize, simulate, state_space
+from brake_hil.core.measurement import SENSORS, measure
+from brake_hil.core.parameters import derive_parameters
+from brake_hil.core.realtime import DeadlineLoop, LoopStatistics, Tick
+from brake_hil.core.rig import Rig, load_rig
+from brake_hil.core.types import FloatArray
+from brake_hil.errors import BrakeHilError
+from brake_hil.nodes import common
+from brake_hil.topics import (
+    AIR_PRESSURE,
+    BLOCK_FORCE,
+    BORE_PRESSURE,
+    CALIPER_DISPLACEMENT,
+    MASTER_CYLINDER_PRESSURE,
+    TopicSpec,
+)
+
+NAME = "rig_emulator"
+SAMPLE_PERIOD_NS = 1_000_000
+QUANTITY_TOPICS: dict[str, TopicSpec] = {
+    "p_i": MASTER_CYLINDER_PRESSURE,
+    "p_b": BORE_PRESSURE,
+    "F_k": BLOCK_FORCE,
+    "x_c": CALIPER_DISPLACEMENT,
+    "p_a": AIR_PRESSURE,
+}
+
+
+_COUNTERS = ("ticks", "late_ticks", "overruns", "ticks_skipped")
+
+
+class EmulatedRun(NamedTuple):
+    """What the emulator plays: measured signals at 1 kHz (SI), by channel key."""
+
+    measured: dict[str, FloatArray]  # p_i, p_b, F_k, x_c (Pa, Pa, N, m), and p_a when present
+    label: str
+
+    @property
+    def samples(self) -> int:
+        """Number of samples."""
+        return int(next(iter(self.measured.values())).size)
+
+
+def precompute_run(
+    rig: Rig,
+    simulator: str = "virtual_rig",
+    effects: Sequence[str] = (),
+    max_pressures: Sequence[float] = (1.38e6,),
+    ramp_s: float = 1.0,
+    pulsing_s: float = 5.0,
+    pulsing_hz: float = 5.0,
+    seed: int = 0,
+) -> EmulatedRun:
+    """The run to play: the seed's ramp-then-pulse input (Pa) through a simulator, measured by
+    the DAQ (noise, 16-bit quantisation, :mod:`brake_hil.core.measurement`).
+
+    ``simulator``: ``virtual_rig`` (:func:`brake_hil.virtual_rig.simulate_rig`, with
+    ``effects`` as ``parse_effect`` texts) or ``lti`` (:func:`brake_hil.core.lti_model.simulate`
+    of the seed's model; ``effects`` must be empty).
+
+    Raises:
+        BrakeHilError: an unknown simulator or effect, effects with ``lti``, a failed run.
+    """
+    if simulator == "virtual_rig":
+        from brake_hil.virtual_rig import parse_effect, seed_pulsing, simulate_rig
+
+        excitation = seed_pulsing(
+            max_pressures, ramp_s=ramp_s, pulsing_s=pulsing_s, pulsing_hz=pulsing_hz
+        )
+        run = simulate_rig(
+            rig, [parse_effect(text) for text in effects], excitation, seed=seed
+        )
+        return EmulatedRun(dict(run.measured), f"virtual rig: {excitation.label}")
+    if simulator != "lti":
+        raise BrakeHilError(f"simulator must be 'virtual_rig' or 'lti', got {simulator!r}")
+    if effects:
+        raise BrakeHilError(f"the lti simulator has no effects; got {list(effects)}")
+    _, pressure = pulsing_profile(
+        max_pressures, ramp_s=ramp_s, pulsing_s=pulsing_s, pulsing_hz=pulsing_hz
+    )
+    model = discretize(state_space(derive_parameters(rig), ModelInput.MASTER_CYLINDER_PRESSURE))
+    p_b, f_k, x_c = simulate(model, pressure)[:3]
+    rng = np.random.default_rng(seed)
+    true = {"p_i": pressure, "p_b": p_b, "F_k": f_k, "x_c": x_c}
+    measured = {key: measure(values, SENSORS[key], rng) for key, values in true.items()}
+    return EmulatedRun(measured, f"lti model: pulsing {pulsing_hz:g} Hz")
+
+
+class _CanOutput:
+    """Frames of each sample to an slcan pseudo-terminal or a python-can bus."""
+
+    def __init__(self, interface: str, channel: str, bitrate: int, link: str, dbc: str) -> None:
+        from brake_hil.io.can_daq import RigFrameCodec, SlcanPty
+
+        self.codec = RigFrameCodec(dbc or None)
+        self.pty: Any = None
+        self.bus: Any = None
+        if interface == "slcan_pty":
+            self.pty = SlcanPty(link or None)
+            self.where = f"slcan pty {self.pty.device_path}" + (f" (link {link})" if link else "")
+        else:
+            import can
+
+            self.bus = can.Bus(interface=interface, channel=channel, bitrate=bitrate)
+            self.where = f"{interface} {channel}"
+        self.sent = 0
+        self.errors = 0
+
+    def send(self, counter: int, values: dict[str, float], timestamp: float) -> None:
+        frames = self.codec.encode(counter, values, timestamp)
+        if self.pty is not None:
+            self.sent += self.pty.send(frames)
+            return
+        for frame in frames:
+            try:
+                self.bus.send(frame, timeout=0.001)
+                self.sent += 1
+            except Exception:  # noqa: BLE001 - a full or lost bus drops the frame, counted
+                self.errors += 1
+
+    @property
+    def dropped(self) -> int:
+        return int(self.pty.dropped) + self.errors if self.pty is not None else self.errors
+
+    def close(self) -> None:
+        if self.pty is not None:
+            self.pty.close()
+        if self.bus is not None:
+            self.bus.shutdown()
+
+
+class RigEmulatorNode(Node):
+    """Plays a precomputed virtual-rig run at 1 kHz on topics and/or CAN."""
+
+    def __init__(self) -> None:
+        super().__init__(NAME)
+        declare = functools.partial(common.declare, self)
+        rig_file = declare("rig_file", "", "truth rig YAML; empty: config/rig_default.yaml")
+        simulator = declare("simulator", "virtual_rig", "virtual_rig or lti")
+        effects = declare("effects", [""], "virtual-rig effects, e.g. seal_stick_slip=0.5")
+        max_pressures = declare("max_pressures", [1.38e6], "pulsing maxima (Pa)")
+        ramp_s = declare("ramp_s", 1.0, "ramp to each maximum (s)")
+        pulsing_s = declare("pulsing_s", 5.0, "pulsing per maximum (s)")
+        pulsing_hz = declare("pulsing_hz", 5.0, "pulsing frequency (Hz)")
+        seed = declare("seed", 0, "sensor-noise seed")
+        self._loop_forever = bool(declare("loop", True, "replay forever; false: exit at end"))
+        self.output = declare("output", "topics", "topics, can or both")
+        can_interface = declare("can_interface", "slcan_pty", "slcan_pty or a python-can one")
+        can_channel = declare("can_channel", "", "python-can channel (not for slcan_pty)")
+        can_bitrate = declare("can_bitrate", 1_000_000, "CAN bitrate (bit/s)")
+        can_link = declare("can_link_path", "/tmp/brake_hil_rig_can", "symlink to the pty")
+        dbc_file = declare("dbc_file", "", "CAN database; empty: config/brake_rig.dbc")
+        frame_id = declare("frame_id", "caliper", "header.frame_id")
+        start_delay = float(declare("start_delay_s", 1.0, "wait before the first sample (s)"))
+        self._wait_for = int(
+            declare("wait_for_subscribers", 0, "start once each topic has this many readers")
+        )
+        self._wait_timeout = float(declare("wait_timeout_s", 30.0, "give up waiting after (s)"))
+        diagnostics_period = float(declare("diagnostics_period_s", 1.0, "diagnostics (s)"))
+        if self.output not in ("topics", "can", "both"):
+            raise BrakeHilError(f"output must be topics, can or both, got {self.output!r}")
+
+        rig = load_rig(rig_file or common.config_path("rig_default.yaml"))
+        started = time.perf_counter()
+        self.run = precompute_run(
+            rig,
+            str(simulator),
+            [text for text in effects if text],
+            [float(p) for p in max_pressures],
+            float(ramp_s),
+            float(pulsing_s),
+            float(pulsing_hz),
+            int(seed),
+        )
+        self.get_logger().info(
+            f"{self.run.label}: {self.run.samples} samples computed in "
+            f"{time.perf_counter() - started:.2f} s"
+        )
+        self._keys = list(self.run.measured)
+        self._columns = np.column_stack([self.run.measured[k] for k in self._keys]).tolist()
+
+        self._outputs: list[tuple[Any, common.MessageBuilder]] = []
+        if self.output in ("topics", "both"):
+            for key in self._keys:
+                spec = QUANTITY_TOPICS[key]
+                publisher = self.create_publisher(
+                    common.message_class(spec), spec.name, common.SAMPLE_QOS
+                )
+                self._outputs.append((publisher, common.MessageBuilder(spec, frame_id)))
+        self._can: _CanOutput | None = None
+        if self.output in ("can", "both"):
+            self._can = _CanOutput(
+                str(can_interface), str(can_channel), int(can_bitrate), str(can_link),
+                str(dbc_file),
+            )
+            self.get_logger().info(f"CAN frames on {self._can.where}")
+        self._diagnostics = self.create_publisher(
+            DiagnosticArray, common.DIAGNOSTICS_TOPIC, common.DIAGNOSTICS_QOS
+        )
+        self.create_timer(diagnostics_period, self._report)
+
+        self.exit_requested = threading.Event()
+        self.sent = 0  # samples played
+        self.passes = 0
+        self.statistics = LoopStatistics()
+        self._wall_minus_monotonic = time.time_ns() - time.monotonic_ns()
+        self._start_delay_ns = round(start_delay * 1e9)
+        self._first_deadline = 0
+        self._loop = DeadlineLoop(
+            self._tick,
+            SAMPLE_PERIOD_NS,
+            statistics=self.statistics,
+            on_error=self._failed,
+            name="rig-emulator",
+        )
+        self._waiting_since = time.monotonic()
+        self._wait_timer = self.create_timer(0.05, self._start_when_subscribed)
+
+    def _start_when_subscribed(self) -> None:
+        """Start playing once every topic has ``wait_for_subscribers`` readers (or at the
+        timeout), ``start_delay_s`` later."""
+        ready = all(p.get_subscription_count() >= self._wait_for for p, _ in self._outputs)
+        waited = time.monotonic() - self._waiting_since
+        if not ready and waited < self._wait_timeout:
+            return
+        if not ready:
+            self.get_logger().warning(f"starting without subscribers after {waited:.1f} s")
+        self._wait_timer.cancel()
+        self._first_deadline = time.monotonic_ns() + self._start_delay_ns
+        self._loop.start(self._first_deadline)
+
+    def _tick(self, tick: Tick) -> None:
+        """Play every sample due by this tick (catch-up after a late wake-up)."""
+        samples = len(self._columns)
+        while self.sent <= tick.slot:
+            k = self.sent
+            index = k % samples
+            if index == 0 and k:
+                self.passes += 1
+                if not self._loop_forever:
+                    self._loop.stop(0)
+                    self.exit_requested.set()
+                    return
+            row = self._columns[index]
+            stamp = self._first_deadline + k * SAMPLE_PERIOD_NS + self._wall_minus_monotonic
+            for (publisher, build), value in zip(self._outputs, row):
+                publisher.publish(build(stamp, value))
+            if self._can is not None:
+                self._can.send(k, dict(zip(self._keys, row)), stamp / 1e9)
+            self.sent = k + 1
+
+    def _failed(self, err: BaseException) -> None:
+        self.get_logger().error(f"playback stopped: {type(err).__name__}: {err}")
+        self.exit_requested.set()
+
+    def _report(self) -> None:
+        window = self.statistics.take_window()
+        values: list[tuple[str, object]] = [
+            ("run", self.run.label),
+            ("samples_sent", self.sent),
+            ("passes", self.passes),
+            ("output", self.output),
+            *common.timing_values({"period_error": window["period_error"]}),
+            *((k, v) for k, v in self.statistics.counters.as_dict().items() if k in _COUNTERS),
+        ]
+        level = common.OK
+        if self._can is not None:
+            values += [("can", self._can.where), ("can_frames_sent", self._can.sent)]
+            values.append(("can_frames_dropped", self._can.dropped))
+        if self._loop.error is not None:
+            level = common.ERROR
+        status = common.diagnostic_status(f"{NAME}: playback", level, "playing", values)
+        self._diagnostics.publish(common.diagnostic_array(self, [status]))
+
+    def close(self) -> None:
+        """Stop playing and release the CAN output."""
+        self._loop.stop()
+        if self._can is not None:
+            self._can.close()
+
+
+def main(args: list[str] | None = None) -> int:
+    """Entry point ``rig_emulator``: play until SIGINT/SIGTERM (or the end, ``loop: false``)."""
+    common.init_ros(args)
+    try:
+        node = RigEmulatorNode()
+    except (BrakeHilError, OSError) as err:
+        print(f"{NAME}: error: {err}", file=sys.stderr)
+        rclpy.shutdown()
+        return 2
+    try:
+        common.spin_until_signal(node, node.exit_requested)
+    finally:
+        node.close()
+        node.destroy_node()
+        rclpy.shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
