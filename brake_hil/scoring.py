@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 import json
 from pathlib import Path
 import statistics
@@ -44,6 +44,7 @@ class CaseResult:
     baseline_nrmse: dict[str, float]
     improved_nrmse: dict[str, float]
     error: str = ""
+    improvements: dict[str, float] = field(default_factory=dict)  # hypothesis -> ratio
 
 
 def diagnose_case(case_dir: Path) -> CaseResult:
@@ -64,6 +65,10 @@ def diagnose_case(case_dir: Path) -> CaseResult:
         seconds=time.perf_counter() - began,
         baseline_nrmse=result.baseline.held_out_nrmse,
         improved_nrmse=result.improved.held_out_nrmse,
+        improvements={
+            "+".join(h.effects): result.baseline.held_out_cost / max(h.held_out_cost, 1e-15)
+            for h in result.hypotheses
+        },
     )
 
 

@@ -36,8 +36,10 @@ from brake_hil.topics import OUTPUT_CHANNELS
 
 ACCEPT_RATIO = 2.0
 """A candidate must cut the held-out mean squared error at least this much."""
-PAIR_RATIO = 2.0
-"""A second effect must cut it again at least this much."""
+PAIR_RATIO = 1.8
+"""A second effect must cut it again at least this much ..."""
+SECOND_ALONE_RATIO = 1.3
+"""... and cut the baseline's error at least this much on its own."""
 PARAMETER_PENALTY = 0.05
 """Log-ratio charged per fitted parameter when ranking (prefers the simpler of equals)."""
 UNEXPLAINED_NRMSE = 0.02
@@ -183,28 +185,26 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         singles.append(fit(Model(calibration, [candidate], dataset)))
     ranked = sorted(singles, key=lambda h: _score(baseline, h), reverse=True)
     hypotheses = list(singles)
+    eligible = [h for h in ranked if _plausible(h)]
     chosen: Fit | None = None
-    best = ranked[0]
-    if baseline.held_out_cost / max(best.held_out_cost, 1e-15) >= ACCEPT_RATIO:
+    best = eligible[0] if eligible else ranked[0]
+    if eligible and _gain(baseline, best) >= ACCEPT_RATIO:
         chosen = best
-        for other in ranked[1 : PAIR_SHORTLIST + 1]:
+        own = len(best.theta) - len(calibration.sigmas)
+        for other in eligible[1 : PAIR_SHORTLIST + 1]:
             names = (best.effects[0], other.effects[0])
-            if _shares_physics(names):
+            if _shares_physics(names) or _gain(baseline, other) < SECOND_ALONE_RATIO:
                 continue
             say(f"fitting {' + '.join(names)}")
             pair_model = Model(calibration, [BY_NAME[n] for n in names], dataset)
-            start = np.concatenate(
-                [
-                    best.theta[: len(best.theta) - len(calibration.sigmas)],
-                    other.theta[: len(other.theta) - len(calibration.sigmas)],
-                    best.theta[len(best.theta) - len(calibration.sigmas) :],
-                ]
-            )
+            other_own = len(other.theta) - len(calibration.sigmas)
+            start = np.concatenate([best.theta[:own], other.theta[:other_own], best.theta[own:]])
             pair = fit(pair_model, start=start)
             hypotheses.append(pair)
             if (
-                chosen.held_out_cost / max(pair.held_out_cost, 1e-15) >= PAIR_RATIO
-                and len(chosen.effects) == 1
+                len(chosen.effects) == 1
+                and _plausible(pair)
+                and chosen.held_out_cost / max(pair.held_out_cost, 1e-15) >= PAIR_RATIO
             ):
                 chosen = pair
     baseline_nrmse = max(baseline.held_out_nrmse.values())
@@ -246,6 +246,23 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         improved_metrics=held_out_metrics(improved_model, improved.theta),
         dataset=dataset,
     )
+
+
+def _gain(baseline: Fit, candidate: Fit) -> float:
+    """Held-out improvement of the mean squared error over the baseline."""
+    return baseline.held_out_cost / max(candidate.held_out_cost, 1e-15)
+
+
+def _plausible(fit: Fit) -> bool:
+    """Every effect's fitted parameters describe that physics (see Candidate.plausible)."""
+    column = 0
+    for name in fit.effects:
+        candidate = BY_NAME[name]
+        size = len(candidate.parameters)
+        if not candidate.plausible(fit.theta[column : column + size]):
+            return False
+        column += size
+    return True
 
 
 def _shares_physics(names: tuple[str, str]) -> bool:

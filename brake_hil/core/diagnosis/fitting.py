@@ -95,8 +95,13 @@ class Model:
         ]
         sigmas = self.calibration.sigmas
         multipliers = [
-            (f"calibration.{name}", "x", float(np.exp(-PRIOR_SPAN * sigma)),
-             float(np.exp(PRIOR_SPAN * sigma)), True)
+            (
+                f"calibration.{name}",
+                "x",
+                float(np.exp(-PRIOR_SPAN * sigma)),
+                float(np.exp(PRIOR_SPAN * sigma)),
+                True,
+            )
             for name, sigma in sigmas.items()
         ]
         return own + multipliers
@@ -115,10 +120,12 @@ class Model:
         """The simulator spec of every row of ``theta`` (B, P) for one window."""
         names = list(self.calibration.sigmas)
         rig = self.calibration.rig
-        draft = Draft([
-            apply_multipliers(rig, window.mean_pressure, dict(zip(names, row)))
-            for row in theta[:, self.effect_size :]
-        ])
+        draft = Draft(
+            [
+                apply_multipliers(rig, window.mean_pressure, dict(zip(names, row)))
+                for row in theta[:, self.effect_size :]
+            ]
+        )
         column = 0
         for candidate, size in zip(self.candidates, self.sizes):
             candidate.fill(draft, theta[:, column : column + size], self.context)
@@ -248,8 +255,13 @@ def fit(model: Model, start: FloatArray | None = None, max_iterations: int = 15)
         return np.asarray((r[1:] - r[0]).T / actual, dtype=float)
 
     result = scipy.optimize.least_squares(
-        residual, x0, jac=jacobian, bounds=(lower, upper), method="trf",
-        max_nfev=max_iterations, x_scale=width / 4,
+        residual,
+        x0,
+        jac=jacobian,
+        bounds=(lower, upper),
+        method="trf",
+        max_nfev=max_iterations,
+        x_scale=width / 4,
     )
     theta = _from_search(model, result.x)
     data_part = result.fun[: result.fun.size - sigma.size] * MODEL_ERROR

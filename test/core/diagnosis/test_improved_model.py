@@ -42,7 +42,7 @@ def _model(effects: tuple[str, ...], parameters: dict[str, float]) -> ImprovedMo
     ("effects", "parameters"),
     [
         ((), {}),
-        (("seal_stick_slip",), {"seal_spring": 2.3e7, "slip_force": 250.0}),
+        (("seal_stick_slip",), {"seal_spring": 2.3e7, "slip_force": 250.0, "friction_share": 0.6}),
         (
             ("entrained_air", "sensor_delay"),
             {"air_share": 0.01, "delay_p_b": 0.0, "delay_F_k": 0.002, "delay_x_c": 0.0035},

@@ -85,6 +85,12 @@ class Candidate:
         """Whether the measured evidence shows this candidate's signature."""
         return True
 
+    def plausible(self, theta: FloatArray) -> bool:
+        """Whether fitted parameters ``theta`` (this candidate's own) describe this physics
+        rather than a stand-in for something else (e.g. a common delay of every output is a
+        dynamics error, not an acquisition skew)."""
+        return True
+
     def start(self, context: Context) -> FloatArray:
         """Start values of the parameters (may use the rig's derived quantities)."""
         return np.array([p.start for p in self.parameters])

@@ -12,9 +12,6 @@ from brake_hil.core.diagnosis.candidates.base import (
 )
 from brake_hil.core.types import FloatArray
 
-RESIDUAL_DAMPING = 0.05
-"""Share of the calibrated c_eh kept as the seal's structural (viscous) damping."""
-
 
 class SealStickSlip(Candidate):
     """Stick-slip seal friction in place of the equivalent viscous ``k_eh``, ``c_eh``.
@@ -23,13 +20,16 @@ class SealStickSlip(Candidate):
     seed eq. 3); once its force reaches the static friction threshold (both seals: about
     ``2 F_fs = 2 mu_fs N_s``, eq. 2) it slips with that force and carries almost no stiffness
     (the seed's two-valued stiffness, section "Characterisation of k_eh"). A Jenkins element:
-    an ideal spring in series with an ideal Coulomb slider, plus a small structural damper.
+    an ideal spring in series with an ideal Coulomb slider. A share ``phi`` of the seal's
+    response is frictional; the rest stays the calibrated equivalent spring and damper (a
+    seal that slips over only part of its contact, or one whose rubber shears viscously).
     """
 
     name = "seal_stick_slip"
     parameters = (
         CandidateParameter("seal_spring", "N/m", 2.0e6, 2.0e8, 2.3e7, logarithmic=True),
         CandidateParameter("slip_force", "N", 10.0, 3.0e3, 310.0, logarithmic=True),
+        CandidateParameter("friction_share", "-", 0.05, 1.0, 0.7),
     )
     signature = (
         "k_eh falls as the pressure amplitude grows; super-harmonics grow from p_i to x_c; "
@@ -39,16 +39,17 @@ class SealStickSlip(Candidate):
     def start(self, context: Context) -> FloatArray:
         """Seed eqs. 2-3 for both seals."""
         return np.array(
-            [2.0 * context.seal.static_stiffness, 2.0 * context.seal.friction_threshold]
+            [2.0 * context.seal.static_stiffness, 2.0 * context.seal.friction_threshold, 0.7]
         )
 
     def fill(self, draft: Draft, theta: FloatArray, context: Context) -> None:
-        """Replace k_eh by the Jenkins spring and most of c_eh by the slider."""
-        draft.scale("effective_hydraulic_stiffness", np.zeros(draft.batch))
-        draft.scale("effective_hydraulic_damping", np.full(draft.batch, RESIDUAL_DAMPING))
-        draft.fields["jenkins_spring"] = theta[:, 0].copy()
-        draft.add("apply_threshold", theta[:, 1])
-        draft.add("release_threshold", theta[:, 1])
+        """Replace the share phi of k_eh, c_eh by the Jenkins element."""
+        share = theta[:, 2]
+        draft.scale("effective_hydraulic_stiffness", 1.0 - share)
+        draft.scale("effective_hydraulic_damping", 1.0 - share)
+        draft.fields["jenkins_spring"] = theta[:, 0] * share
+        draft.add("apply_threshold", theta[:, 1] * share)
+        draft.add("release_threshold", theta[:, 1] * share)
 
     def consistent(self, evidence: dict[str, float]) -> bool:
         """Harmonics grow toward x_c, or k_eh falls with amplitude."""

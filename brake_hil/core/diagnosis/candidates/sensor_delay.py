@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from brake_hil.core.diagnosis.candidates.base import (
     Candidate,
     CandidateParameter,
@@ -9,6 +11,9 @@ from brake_hil.core.diagnosis.candidates.base import (
     Draft,
 )
 from brake_hil.core.types import FloatArray
+
+SKEW_THRESHOLD = 0.5e-3
+"""Delay difference (s) that counts as acquisition skew."""
 
 
 class SensorDelay(Candidate):
@@ -30,6 +35,14 @@ class SensorDelay(Candidate):
     def fill(self, draft: Draft, theta: FloatArray, context: Context) -> None:
         """Delay each output channel."""
         draft.fields["output_delay"] = theta[:, :3].copy()
+
+    def plausible(self, theta: FloatArray) -> bool:
+        """Skew: one output lags the others by over half a millisecond, or every output
+        leads alike (the input ``p_i`` acquired late). A common lag of every output is the
+        model's own phase error, not acquisition skew."""
+        delays = np.asarray(theta[:3], dtype=float)
+        spread = float(np.max(np.abs(delays - np.median(delays))))
+        return spread > SKEW_THRESHOLD or float(np.max(delays)) < -SKEW_THRESHOLD
 
     def consistent(self, evidence: dict[str, float]) -> bool:
         """A channel lags by more than a millisecond."""
