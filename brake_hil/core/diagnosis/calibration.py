@@ -9,7 +9,7 @@ missing physics, and a mismatch that would need a value far outside its toleranc
 for the candidates to explain.
 
 The data term is the mean squared residual of each channel over its peak-to-peak, divided by
-``MODEL_ERROR**2``: a 2 % misfit on one channel weighs as much as one sigma of one parameter.
+``MODEL_ERROR**2``: a 0.3 % misfit on one channel weighs as much as one sigma of one parameter.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ from brake_hil.core.rig import Rig
 from brake_hil.core.types import FloatArray
 from brake_hil.topics import OUTPUT_CHANNELS
 
-MODEL_ERROR = 0.02
+MODEL_ERROR = 0.003
 """Relative misfit (of peak-to-peak) that weighs as one sigma of prior."""
 
 
