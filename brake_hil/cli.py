@@ -12,6 +12,7 @@ from collections.abc import Sequence
 import json
 from pathlib import Path
 import sys
+from typing import Any
 
 import numpy as np
 
@@ -32,6 +33,7 @@ from brake_hil.topics import (
     MASTER_CYLINDER_PRESSURE,
     MEASURED_OUTPUTS,
 )
+from brake_hil.virtual_rig import cli as virtual_rig_cli
 
 EXIT_BAD_INPUT = 2
 
@@ -131,8 +133,9 @@ def run_diagnose(recording_path: Path, rig_path: Path, out: Path) -> dict[str, o
     recording = read_recording(
         recording_path, required=(MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS)
     )
-    with tqdm(total=16, desc="diagnose", unit="step", file=sys.stderr,
-              disable=not sys.stderr.isatty()) as bar:
+    with tqdm(
+        total=16, desc="diagnose", unit="step", file=sys.stderr, disable=not sys.stderr.isatty()
+    ) as bar:
 
         def progress(message: str) -> None:
             bar.set_postfix_str(message)
@@ -152,6 +155,49 @@ def run_diagnose(recording_path: Path, rig_path: Path, out: Path) -> dict[str, o
     print(diagnosis.explanation)
     print(f"report: {page}")
     return result
+
+
+def run_benchmark(directory: Path, jobs: int, json_path: Path | None) -> dict[str, object]:
+    """``brake-hil benchmark``: the diagnosis blind on ``DIR/cases``, scored on ``DIR/labels.json``
+    only after every verdict is in."""
+    from brake_hil.scoring import CaseResult, read_labels, run_cases, score
+
+    cases = sorted(p for p in (directory / "cases").glob("*") if p.is_dir())
+    if not cases:
+        raise BrakeHilError(f"{directory}: no cases under {directory / 'cases'}")
+    labels_path = directory / "labels.json"
+    if not labels_path.exists():
+        raise BrakeHilError(f"{labels_path}: no labels to score against")
+
+    def show(result: CaseResult) -> None:
+        verdict = ", ".join(result.effects) or "none"
+        print(
+            f"case {result.case}: {verdict} ({result.confidence:.2f}, {result.seconds:.1f} s)"
+            + (f" error: {result.error}" if result.error else ""),
+            flush=True,
+        )
+
+    results = run_cases(cases, workers=jobs, progress=show)
+    figures: dict[str, Any] = dict(score(results, read_labels(labels_path)))
+    rows = [
+        ("top-1 accuracy, single effects", "top1_accuracy_single", "single_effect_cases"),
+        ("exact-set accuracy, pairs", "exact_set_accuracy_pairs", "pair_cases"),
+        ("false-positive rate, null cases", "false_positive_rate_null", "null_cases"),
+        ("unexplained recall", "unexplained_recall", "unexplained_cases"),
+    ]
+    for text, key, count in rows:
+        print(f"{text:40s}{100 * float(figures[key]):6.1f} %  of {figures[count]} cases")
+    print(
+        f"{'held-out NRMSE improvement, median':40s}"
+        f"{float(figures['held_out_nrmse_improvement_median']):6.2f} x"
+    )
+    print(
+        f"{'seconds per recording, mean / max':40s}"
+        f"{float(figures['seconds_per_recording_mean']):6.1f} / "
+        f"{float(figures['seconds_per_recording_max']):.1f}"
+    )
+    _write_json(json_path, figures)
+    return figures
 
 
 def _write_json(path: Path | None, result: dict[str, object]) -> None:
@@ -181,7 +227,9 @@ def build_parser() -> argparse.ArgumentParser:
     dgn.add_argument("recording", type=Path)
     dgn.add_argument("--rig", type=Path, required=True)
     dgn.add_argument("--out", type=Path, required=True, help="folder for diagnosis.json etc.")
-    sim = commands.add_parser("simulate", help="write a recording of the LTI model")
+    sim = commands.add_parser(
+        "simulate", help="write a recording of the LTI model or of the virtual rig"
+    )
     sim.add_argument("--rig", type=Path, required=True, help="the rig to simulate (truth)")
     sim.add_argument("--out", type=Path, required=True, help="new rosbag2 directory")
     sim.add_argument(
@@ -193,6 +241,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sim.add_argument("--pulsing-seconds", type=float, default=5.0)
     sim.add_argument("--seed", type=int, default=0)
+    virtual_rig_cli.add_simulate_arguments(sim)
+    virtual_rig_cli.add_cases_parser(commands)
+    bench = commands.add_parser("benchmark", help="score the diagnosis blind on labelled cases")
+    bench.add_argument("directory", type=Path, help="made by 'brake-hil cases'")
+    bench.add_argument("--jobs", type=int, default=1)
+    bench.add_argument("--json", type=Path)
     reg = commands.add_parser("regress", help="replay recordings through the model vs a baseline")
     reg.add_argument("recordings", type=Path, nargs="+")
     reg.add_argument("--baseline", type=Path, required=True, help="baseline JSON")
@@ -212,8 +266,14 @@ def main(argv: Sequence[str] | None = None) -> int:
             run_characterize(args.recording, args.rig, args.json)
         elif args.command == "diagnose":
             run_diagnose(args.recording, args.rig, args.out)
+        elif args.command == "simulate" and virtual_rig_cli.uses_virtual_rig(args):
+            virtual_rig_cli.run_virtual_simulate(args)
         elif args.command == "simulate":
             run_simulate(args.rig, args.out, args.max_pressure, args.pulsing_seconds, args.seed)
+        elif args.command == "cases":
+            virtual_rig_cli.run_cases(args)
+        elif args.command == "benchmark":
+            run_benchmark(args.directory, args.jobs, args.json)
         elif args.command == "regress":
             return run_regression(
                 args.recordings, args.baseline, read_recording, args.model, args.update, args.jobs

@@ -95,12 +95,20 @@ def run_cases(
 
 
 def read_labels(path: Path) -> dict[str, list[str]]:
-    """Labels ``{case: [effect, ...]}`` (``[]`` for a null case, ``["unexplained"]``)."""
+    """Labels ``{case: [effect, ...]}`` (``[]`` for a null case, ``["unexplained"]``).
+
+    Reads ``brake-hil cases``'s ``labels.json`` (``{"cases": {case: {"expected_effects":
+    [...]}}}``) or a plain ``{case: {"effects": [...]}}``.
+    """
     try:
         document = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, json.JSONDecodeError) as err:
+        entries = document.get("cases", document)
+        return {
+            str(case): [str(e) for e in entry.get("expected_effects", entry.get("effects"))]
+            for case, entry in entries.items()
+        }
+    except (OSError, json.JSONDecodeError, AttributeError, TypeError) as err:
         raise BrakeHilError(f"{path}: cannot read labels: {err}") from err
-    return {str(case): list(entry["effects"]) for case, entry in document.items()}
 
 
 def score(results: list[CaseResult], labels: dict[str, list[str]]) -> dict[str, object]:

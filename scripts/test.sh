@@ -8,6 +8,6 @@ bash scripts/setup.sh
 # Any ROS node a test starts talks over loopback only (no multicast on the network).
 export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
 echo "== ruff" && .venv/bin/ruff check .
-echo "== mypy" && .venv/bin/mypy brake_hil/core brake_hil/io brake_hil/cli.py \
+echo "== mypy" && .venv/bin/mypy brake_hil/core brake_hil/io brake_hil/virtual_rig brake_hil/cli.py brake_hil/scoring.py \
   brake_hil/topics.py brake_hil/errors.py
 echo "== pytest" && .venv/bin/python -m pytest -q -p no:cacheprovider test "$@"

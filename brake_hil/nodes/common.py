@@ -3,14 +3,17 @@
 * :func:`setup_environment` keeps DDS discovery on loopback unless the caller chose otherwise.
 * :data:`SAMPLE_QOS`: the 1 kHz sample topics are reliable, volatile, keep-last 1000 (one
   second at 1 kHz: a subscriber that stalls for less than that loses nothing).
-* :class:`MessageBuilder` / :func:`value_reader`: one message per sample of a contract topic,
-  ``header.stamp`` = the sample's acquisition time, the value in the topic's field.
+* Messages of a contract topic, ``header.stamp`` = the sample's acquisition time, the value in
+  the topic's field: :class:`RawMessageBuilder` (CDR bytes, for ``publish``),
+  :class:`MessageBuilder` (rclpy messages), :func:`raw_reader` / :func:`value_reader`.
+* :class:`PolledInput`: a subscription a node's own thread takes from (no executor).
 * :func:`diagnostic_status`: ``diagnostic_msgs/msg/DiagnosticStatus`` with key-value pairs;
   nodes publish arrays of them on ``/diagnostics`` (:data:`DIAGNOSTICS_TOPIC`), the
   comparator also on ``/brake/comparison`` (:data:`COMPARISON_TOPIC`).
-* :func:`spin_until_signal`: callbacks on a background executor (rclpy's EventsExecutor when
-  available) until SIGINT/SIGTERM, so a node can finish its work (drain, final diagnostics,
-  files) before ``destroy_node()`` / ``rclpy.shutdown()``. Start rclpy with
+* :func:`spin_until_signal` (callbacks on a background executor, rclpy's EventsExecutor when
+  available) or :func:`wait_for_signal` (a node whose own thread does the work) run until
+  SIGINT/SIGTERM, so a node can finish its work (drain, final diagnostics, files,
+  :func:`wait_for_acks`) before ``destroy_node()`` / ``rclpy.shutdown()``. Start rclpy with
   :func:`init_ros` (rclpy's own signal handler off, ours on).
 """
 
@@ -130,6 +133,38 @@ def raw_reader(spec: TopicSpec) -> Callable[[bytes], tuple[int, float]]:
     return read
 
 
+def _never_called(message: Any) -> None:
+    del message
+
+
+class PolledInput:
+    """A raw subscription that its owner's thread takes from directly, with no executor.
+
+    :meth:`take_all` returns every message the middleware holds for it, each with rmw's
+    message info (``received_timestamp``, ns since the epoch; ``publication_sequence_number``;
+    ``publisher_gid``), through the same ``take`` rclpy's executors use. For a node that does
+    all its work on one thread (the GIL is never contended at a deadline, and there is no
+    per-message callback dispatch). The subscription's history (``qos.depth``) must hold
+    what arrives between two takes.
+    """
+
+    def __init__(self, node: Node, spec: TopicSpec, qos: QoSProfile = SAMPLE_QOS) -> None:
+        self.spec = spec
+        self.read = raw_reader(spec)
+        self._subscription = node.create_subscription(
+            message_class(spec), spec.name, _never_called, qos, raw=True
+        )
+
+    def take_all(self) -> list[tuple[bytes, dict[str, Any]]]:
+        """Every held message as ``(cdr_bytes, info)``, oldest first."""
+        handle, msg_type = self._subscription.handle, self._subscription.msg_type
+        taken: list[tuple[bytes, dict[str, Any]]] = []
+        with handle:
+            while (message := handle.take_message(msg_type, True)) is not None:
+                taken.append(message)
+        return taken
+
+
 def value_reader(spec: TopicSpec) -> Callable[[Any], float]:
     """Reads the topic's value (SI) from one of its messages."""
     getter = attrgetter(spec.field)
@@ -155,6 +190,47 @@ class MessageBuilder:
         self._stamp.sec, self._stamp.nanosec = divmod(stamp, NS_PER_S)
         setattr(self._target, self._attribute, value)
         return self._message
+
+
+class RawMessageBuilder:
+    """Serialised (CDR, little endian) messages of one contract topic:
+    ``builder(stamp_ns, value) -> bytes``, for ``publisher.publish(bytes)``.
+
+    The layout of :mod:`brake_hil.io.stamped_cdr` (a header, then float64 fields, the topic's
+    field set and the others 0): what rclpy's ``serialize_message`` gives, padding bytes
+    zeroed. At 1 kHz it saves rclpy's conversion of a Python message to C on every publish.
+    """
+
+    def __init__(self, spec: TopicSpec, frame_id: str) -> None:
+        fields = FLOAT_FIELDS[spec.msgtype]
+        name = frame_id.encode("utf-8") + b"\0"
+        body = 4 + ((12 + len(name) + 7) // 8) * 8  # offset of the first float64
+        self._template = bytearray(body + 8 * len(fields))
+        self._template[0:4] = b"\x00\x01\x00\x00"
+        struct.pack_into("<I", self._template, 12, len(name))
+        self._template[16 : 16 + len(name)] = name
+        self._value_offset = body + 8 * fields.index(spec.field)
+        self._stamp = struct.Struct("<iI")
+        self._value = struct.Struct("<d")
+
+    def __call__(self, stamp: int, value: float) -> bytes:
+        sec, nanosec = divmod(stamp, NS_PER_S)
+        self._stamp.pack_into(self._template, 4, sec, nanosec)
+        self._value.pack_into(self._template, self._value_offset, value)
+        return bytes(self._template)
+
+
+def wait_for_acks(publishers: Iterable[Any], timeout_s: float = 1.0) -> bool:
+    """Wait until every reliable subscriber has acknowledged what ``publishers`` sent (before
+    the node is destroyed: samples still in flight would be lost). True when all were."""
+    from rclpy.duration import Duration
+
+    deadline = time.monotonic() + timeout_s
+    acked = True
+    for publisher in publishers:
+        left = max(0.0, deadline - time.monotonic())
+        acked = publisher.wait_for_all_acked(Duration(nanoseconds=round(left * 1e9))) and acked
+    return acked
 
 
 def declare(node: Node, name: str, default: Any, description: str) -> Any:
@@ -263,6 +339,24 @@ def spin_until_signal(node: Node, stop: threading.Event | None = None) -> bool:
     return not failed.is_set()
 
 
+def wait_for_signal(finished: Callable[[], bool] = lambda: False) -> None:
+    """Block until SIGINT or SIGTERM, or until ``finished()`` (polled every 0.1 s): for a node
+    whose own thread does all its work, with no executor to spin."""
+    stop = threading.Event()
+
+    def on_signal(signum: int, frame: object) -> None:
+        del signum, frame
+        stop.set()
+
+    previous = {sig: signal.signal(sig, on_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        while not stop.wait(0.1) and not finished():
+            pass
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+
 def _spin(executor: Executor, stop: threading.Event, failed: threading.Event) -> None:
     # spin_once in a loop rather than spin(): the EventsExecutor's shutdown() from another
     # thread does not return while spin() runs, and the node must outlive the executor to
@@ -276,7 +370,3 @@ def _spin(executor: Executor, stop: threading.Event, failed: threading.Event) ->
     finally:
         stop.set()
 
-
-def now_ns() -> int:
-    """Wall-clock time (ns since the epoch), the clock of ``header.stamp``."""
-    return time.time_ns()

@@ -84,3 +84,14 @@ def test_malformed_files_are_refused_naming_the_file(tmp_path: Path) -> None:
     path.write_text(json.dumps(document))
     with pytest.raises(ImprovedModelError, match="unknown effect 'warp_drive'"):
         read_improved_model(path)
+
+
+def test_the_caliper_node_loader_reads_an_improved_model(tmp_path: Path) -> None:
+    from brake_hil.core.model_file import load_model
+
+    path = _model(("entrained_air",), {"air_share": 0.02}).save(tmp_path / "improved.json")
+    live = load_model(path, 1.2e6)
+    assert "entrained_air" in live.description
+    stepper = live.stepper()
+    first = stepper.step(1.2e6)
+    assert first.bore_pressure == pytest.approx(1.2e6, rel=1e-9)

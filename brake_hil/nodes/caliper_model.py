@@ -1,0 +1,358 @@
+"""Caliper model node: the model stepped live, at 1 kHz, on the master-cylinder pressure.
+
+Subscribes to ``/brake/master_cylinder/pressure`` (``p_i``) and publishes the predicted
+``/brake/model/bore/pressure``, ``/brake/model/block/force`` and
+``/brake/model/caliper/displacement``, each stamped with the stamp of the input sample it was
+computed from (interface.md). A dedicated thread runs a 1 kHz loop on absolute deadlines
+(:class:`~brake_hil.core.realtime.DeadlineLoop`); each tick takes every input sample the
+middleware has received since the last tick (the subscription's own ``take``, with the
+middleware's receive time) and steps the model once for each, in order
+(:class:`~brake_hil.core.realtime.CatchUpRunner`), so no sample is skipped and the output
+equals the offline batch model on the same samples (``LiveModel.batch``: same equilibrium
+start at the first sample). The tick's phase follows the input's arrival phase
+(:class:`~brake_hil.core.realtime.PhaseLock`), so a sample waits for its tick a fraction of a
+millisecond. That thread is the node's only Python thread (diagnostics are published from
+it too): nothing contends with it for the GIL at a deadline. So the node runs without an
+executor and without parameter services; its parameters are read-only, set at start.
+
+The model steps on the raw ``p_i`` it receives. (``brake-hil compare`` filters ``p_i`` with
+the seed's 30 Hz zero-phase low-pass first; that filter is not causal, so it cannot run live.
+The comparator filters predictions and measurements alike before scoring.)
+
+Parameters (``config/nodes.yaml``):
+
+- ``model_file`` (str): a rig YAML with optional ``model:`` overrides (or any kind
+  :mod:`brake_hil.core.model_file` has a loader for). Default ``config/rig_default.yaml``.
+- ``mean_pressure`` (float, Pa, 0.9e6): mean master-cylinder pressure the model's
+  coefficients are derived at (the isothermal air modulus, eq. 18). The chain passes the
+  replayed recording's mean ``p_i``.
+- ``loop_period`` (float, s, 0.001): tick period.
+- ``spin_margin_us`` (int, 150): the loop sleeps until this long before a deadline, then spins.
+- ``phase_lock`` (bool, true): place ticks just after the input's usual arrival phase.
+- ``input_late_ms`` (float, 5.0) / ``input_silent_ms`` (float, 50.0): no input sample for this
+  long makes the input LATE (WARN) / SILENT (ERROR) on diagnostics, reported at the next tick.
+- ``hold_mode`` (str, ``report``): ``report`` invents nothing; ``hold`` free-runs on the last
+  input once SILENT, one step a period, the held predictions counted and the input status
+  saying so (WARN). Late real samples whose stamps the hold already covered are dropped.
+- ``frame_id`` (str, ``caliper``): ``header.frame_id`` of the predictions.
+- ``diagnostics_period`` (float, s, 1.0): period of the ``/diagnostics`` report; input state
+  changes are reported at once.
+- ``realtime_priority`` (int, 0): SCHED_FIFO priority of the loop thread; the node's other
+  threads (the middleware's receive threads) run one above, so arrivals are never held off
+  by the loop (0: normal scheduling for all). Needs CAP_SYS_NICE; reported on diagnostics
+  (``sched_fifo``).
+- ``statistics_file`` (str, ""): write the whole run's timing (JSON) there at shutdown.
+
+Diagnostics (``/diagnostics``): ``caliper_model: loop`` (period error, tick work, step time,
+input wait (arrival to its tick), input-to-prediction latency (arrival to published), stamp
+age (stamp to published): median, p99, p99.9, max in us over the last report window; ticks,
+late ticks, overruns, skipped slots, samples caught up), ``caliper_model: input`` (state,
+silence, samples, predictions, missing, held, lost in transport), ``caliper_model: model``.
+
+SIGINT/SIGTERM: the loop stops, samples still queued are stepped and published, a final
+report is published and the statistics file written.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+import json
+from pathlib import Path
+import struct
+import sys
+import time
+from typing import Any
+
+from diagnostic_msgs.msg import DiagnosticArray
+import rclpy
+from rclpy.exceptions import ParameterException
+from rclpy.node import Node
+
+from brake_hil.core.model_file import load_model
+from brake_hil.core.parameters import DEFAULT_MEAN_PRESSURE
+from brake_hil.core.realtime import (
+    CatchUpRunner,
+    DeadlineLoop,
+    HoldMode,
+    InputState,
+    LoopStatistics,
+    PhaseLock,
+    Sample,
+    Tick,
+    set_process_realtime_priority,
+)
+from brake_hil.errors import BrakeHilError
+from brake_hil.nodes import common
+from brake_hil.topics import MASTER_CYLINDER_PRESSURE, PREDICTED_OUTPUTS
+
+NAME = "caliper_model"
+INPUT_LEVELS = {
+    InputState.WAITING: common.STALE,
+    InputState.FRESH: common.OK,
+    InputState.LATE: common.WARN,
+    InputState.SILENT: common.ERROR,
+}
+
+
+class CaliperModelNode(Node):
+    """Steps the caliper model for every received ``p_i`` sample on a 1 kHz deadline loop."""
+
+    def __init__(self) -> None:
+        # No parameter services: nothing spins this node but its loop (parameters are
+        # read-only, set at start from the command line or a params file).
+        super().__init__(NAME, start_parameter_services=False)
+        declare = common.declare
+        model_file = declare(
+            self, "model_file", str(common.config_path("rig_default.yaml")), "model file"
+        )
+        mean_pressure = declare(
+            self, "mean_pressure", DEFAULT_MEAN_PRESSURE, "mean p_i the model is derived at, Pa"
+        )
+        period_ns = round(declare(self, "loop_period", 0.001, "tick period, s") * 1e9)
+        spin_ns = declare(self, "spin_margin_us", 150, "spin before each deadline, us") * 1000
+        phase_lock = declare(self, "phase_lock", True, "tick just after the input arrives")
+        late_ns = round(declare(self, "input_late_ms", 5.0, "input LATE after, ms") * 1e6)
+        silent_ns = round(declare(self, "input_silent_ms", 50.0, "input SILENT after, ms") * 1e6)
+        hold = declare(self, "hold_mode", HoldMode.REPORT.value, "report | hold")
+        frame_id = declare(self, "frame_id", "caliper", "header.frame_id of predictions")
+        report_s = declare(self, "diagnostics_period", 1.0, "diagnostics period, s")
+        priority = declare(self, "realtime_priority", 0, "SCHED_FIFO priority, 0: none")
+        self._statistics_file = declare(self, "statistics_file", "", "timing JSON at exit")
+        try:
+            hold_mode = HoldMode(hold)
+        except ValueError as err:
+            raise BrakeHilError(f"hold_mode must be report or hold, got {hold!r}") from err
+
+        self.model = load_model(model_file, float(mean_pressure))
+        self.statistics = LoopStatistics()
+        self._runner = CatchUpRunner(
+            self.model.stepper(),
+            period_ns=period_ns,
+            late_after_ns=late_ns,
+            silent_after_ns=silent_ns,
+            hold_mode=hold_mode,
+            statistics=self.statistics,
+        )
+        self._phase_lock = PhaseLock(period_ns) if phase_lock else None
+        self._builders = [common.RawMessageBuilder(spec, frame_id) for spec in PREDICTED_OUTPUTS]
+        self._outputs = [
+            self.create_publisher(common.message_class(spec), spec.name, common.SAMPLE_QOS)
+            for spec in PREDICTED_OUTPUTS
+        ]
+        self._diagnostics = self.create_publisher(
+            DiagnosticArray, common.DIAGNOSTICS_TOPIC, common.DIAGNOSTICS_QOS
+        )
+        self.corrupt = 0  # input messages too short to decode
+        self.lost = 0  # gaps in the publisher's sequence numbers (middleware drops)
+        self._sequence: dict[bytes, int] = {}
+        # Taken by the loop itself at each tick (no executor: no second Python thread to
+        # contend for the GIL at the deadline).
+        self._input = common.PolledInput(self, MASTER_CYLINDER_PRESSURE)
+        self._report_every = max(1, round(report_s * 1e9 / period_ns))
+        self._relock_every = max(1, round(1e9 / period_ns))
+        self._last_report = self._last_relock = 0  # report / relock windows (slot numbers)
+        self._wall_to_monotonic = time.monotonic_ns() - time.time_ns()
+        self._loop = DeadlineLoop(
+            self._tick,
+            period_ns=period_ns,
+            spin_ns=spin_ns,
+            statistics=self.statistics,
+            realtime_priority=priority,
+            on_error=self._on_loop_error,
+            idle=self._take_input,  # samples are taken in while spinning to the deadline
+            name="caliper-model-loop",
+        )
+        self.get_logger().info(f"{self.model.description} from {self.model.path}")
+        if priority > 0:
+            # The middleware's receive threads one step above the loop: a sample is taken in
+            # as it arrives, even while the loop spins towards its deadline (a loop above them
+            # would hold them off, delaying arrivals until after its tick, and the phase lock
+            # would chase them).
+            set_process_realtime_priority(min(99, priority + 1))
+        self._loop.start()
+
+    # -- the loop (its own thread) -----------------------------------------------------
+
+    def _take_input(self) -> None:
+        """Queue every input sample the middleware holds, with its receive time."""
+        offset = self._wall_to_monotonic
+        lock = self._phase_lock
+        read = self._input.read
+        for data, info in self._input.take_all():
+            received = info["received_timestamp"]
+            arrival = received + offset if received else time.monotonic_ns()
+            self._check_sequence(info)
+            try:
+                stamp, value = read(data)
+            except (struct.error, IndexError):
+                self.corrupt += 1
+                continue
+            self._runner.push(Sample(stamp, value, arrival))
+            if lock is not None:
+                lock.observe(arrival)
+
+    def _check_sequence(self, info: Any) -> None:
+        number = info.get("publication_sequence_number")
+        if number is None:
+            return
+        gid = bytes(info["publisher_gid"]["data"])
+        previous = self._sequence.get(gid)
+        if previous is not None and number > previous + 1:
+            self.lost += number - previous - 1
+        self._sequence[gid] = number
+
+    def _tick(self, tick: Tick) -> None:
+        self._take_input()
+        result = self._runner.tick(tick.wake_ns)
+        if result.predictions:
+            self._publish(result.predictions)
+            add, wake = self.statistics.add, tick.wake_ns
+            for prediction in result.predictions:
+                if not prediction.held:
+                    add("input_wait", wake - prediction.arrival_ns)
+        slot = tick.slot
+        if result.state_changed or slot // self._report_every != self._last_report:
+            self._last_report = slot // self._report_every
+            self._report()
+        if self._phase_lock is not None and slot // self._relock_every != self._last_relock:
+            self._last_relock = slot // self._relock_every
+            phase = self._phase_lock.propose(self._loop.phase_ns)
+            if phase is not None:
+                self._loop.request_phase(phase)
+
+    def _publish(self, predictions: Sequence[Any]) -> None:
+        builders, publishers = self._builders, self._outputs
+        for prediction in predictions:
+            stamp = prediction.stamp_ns
+            for index in range(3):
+                publishers[index].publish(builders[index](stamp, prediction[index + 1]))
+        published, wall = time.monotonic_ns(), time.time_ns()
+        add = self.statistics.add
+        for prediction in predictions:
+            if not prediction.held:
+                add("latency", published - prediction.arrival_ns)
+                add("stamp_age", wall - prediction.stamp_ns)
+
+    @property
+    def running(self) -> bool:
+        """True while the model loop runs."""
+        return self._loop.running
+
+    @property
+    def loop_error(self) -> BaseException | None:
+        """What stopped the model loop, None while it runs or after a clean stop."""
+        return self._loop.error
+
+    def _on_loop_error(self, error: BaseException) -> None:
+        if self.context.ok():
+            self.get_logger().fatal(f"model loop stopped: {type(error).__name__}: {error}")
+
+    # -- reporting -----------------------------------------------------------------------
+
+    def _report(self) -> None:
+        if not self.context.ok():
+            return
+        self._wall_to_monotonic = time.monotonic_ns() - time.time_ns()  # follows clock steps
+        self._diagnostics.publish(common.diagnostic_array(self, self.statuses()))
+
+    def statuses(self) -> list[Any]:
+        """The node's diagnostics now: loop, input, model."""
+        counters = self.statistics.counters
+        window = self.statistics.take_window()
+        loop_level = common.OK
+        loop_message = "1 kHz loop on time"
+        if self._loop.error is not None:
+            loop_level, loop_message = common.ERROR, f"loop stopped: {self._loop.error}"
+        elif window["period_error"].max_us >= 1000.0:
+            loop_level, loop_message = common.WARN, "ticks over 1 ms late in this window"
+        loop_values: list[tuple[str, object]] = [
+            *common.timing_values(window),
+            ("ticks", counters.ticks),
+            ("late_ticks", counters.late_ticks),
+            ("overruns", counters.overruns),
+            ("ticks_skipped", counters.ticks_skipped),
+            ("caught_up_ticks", counters.caught_up_ticks),
+            ("caught_up_samples", counters.caught_up_samples),
+            ("max_samples_per_tick", counters.max_per_tick),
+            ("phase_us", (self._loop.phase_ns or 0) / 1000.0),
+            ("phase_shifts", counters.phase_shifts),
+            ("timer_slack_1ns", self._loop.timer_slack),
+            ("sched_fifo", self._loop.realtime),
+        ]
+        now = time.monotonic_ns()
+        state = self._runner.state
+        silence = self._runner.silence_ns(now)
+        level = INPUT_LEVELS[state]
+        message = f"input {state.value}"
+        if silence is not None and state is not InputState.FRESH:
+            message += f": no p_i for {silence / 1e6:.1f} ms"
+        holding = self._runner.hold_mode is HoldMode.HOLD and state is InputState.SILENT
+        if holding and counters.held:
+            level, message = common.WARN, message + f"; holding last input ({counters.held} held)"
+        input_values: list[tuple[str, object]] = [
+            ("state", state.value),
+            ("silence_ms", -1.0 if silence is None else silence / 1e6),
+            ("samples", counters.samples),
+            ("predictions", counters.predictions),
+            ("pending", self._runner.pending),
+            ("corrupt", self.corrupt),
+            ("lost_in_transport", self.lost),
+            ("missing_samples", counters.missing_samples),
+            ("stamps_backwards", counters.stamps_backwards),
+            ("held", counters.held),
+            ("superseded", counters.superseded),
+            ("hold_mode", self._runner.hold_mode.value),
+        ]
+        model_values = [
+            ("model_file", str(self.model.path)),
+            ("mean_pressure_pa", self.model.mean_pressure),
+        ]
+        return [
+            common.diagnostic_status(f"{NAME}: loop", loop_level, loop_message, loop_values),
+            common.diagnostic_status(f"{NAME}: input", level, message, input_values),
+            common.diagnostic_status(
+                f"{NAME}: model", common.OK, self.model.description, model_values
+            ),
+        ]
+
+    def close(self) -> None:
+        """Stop the loop, step and publish what is still queued, report, write statistics."""
+        self._loop.stop()
+        if self.context.ok() and self._loop.error is None:
+            self._take_input()
+            self._publish(self._runner.tick(time.monotonic_ns()).predictions)
+        self._report()
+        if self.context.ok():
+            common.wait_for_acks(self._outputs)
+        summary = self.statistics.summary()
+        counters = self.statistics.counters
+        self.get_logger().info(
+            f"{counters.samples} samples in, {counters.predictions} predictions out, "
+            f"{counters.overruns} overruns, {counters.late_ticks} ticks over 1 ms late"
+        )
+        if self._statistics_file:
+            path = Path(self._statistics_file)
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+
+
+def main(args: list[str] | None = None) -> int:
+    """Entry point ``caliper_model``: run until SIGINT/SIGTERM."""
+    common.init_ros(args)
+    try:
+        node = CaliperModelNode()
+    except (BrakeHilError, ParameterException) as err:
+        print(f"{NAME}: error: {err}", file=sys.stderr)
+        rclpy.shutdown()
+        return 2
+    try:
+        common.wait_for_signal(lambda: not node.running)
+    finally:
+        node.close()
+        node.destroy_node()
+        rclpy.shutdown()
+    return 0 if node.loop_error is None else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

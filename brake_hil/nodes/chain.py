@@ -1,0 +1,376 @@
+"""The node chain as separate processes: source -> caliper model -> comparator -> recorder.
+
+What ``ros2 launch`` would do, without a ROS install: each node is started as
+``python -m brake_hil.nodes.<name> --ros-args --params-file <file>`` with
+``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` and one ``ROS_DOMAIN_ID`` for the run, in its own
+session (a Ctrl-C reaches the launcher only, which then stops the nodes in order). The
+source replays the recording once and exits (``exit_at_end``) after waiting for the model,
+comparator and recorder to subscribe; the launcher then gives the model and comparator a
+moment to finish, and stops them and the recorder with SIGINT. It prints the comparator's
+run summary, the model's timing, and where the MCAP is, and checks the recorded predictions
+against the batch model on the recorded input.
+
+Usage (from the checkout)::
+
+    .venv/bin/python -m brake_hil.nodes.chain [RECORDING] [--model RIG.yaml] [--out DIR]
+        [--rate R] [--domain-id N]
+
+The recorder is optional: without ``brake_hil/nodes/recorder.py`` the chain runs without it
+and says so. Node logs go to ``DIR/logs/``.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+import importlib.util
+import json
+import os
+from pathlib import Path
+import signal
+import subprocess
+import sys
+import time
+from typing import Any
+
+import numpy as np
+import yaml
+
+from brake_hil.core.model_file import load_model
+from brake_hil.core.realtime import set_realtime_priority
+from brake_hil.errors import BrakeHilError
+from brake_hil.io.recording_reader import read_recording
+from brake_hil.topics import (
+    MASTER_CYLINDER_PRESSURE,
+    MEASURED_OUTPUTS,
+    OUTPUT_CHANNELS,
+    PREDICTED_OUTPUTS,
+)
+
+PROJECT = Path(__file__).resolve().parents[2]
+DEFAULT_RECORDING = PROJECT / "bags" / "one_washer_lti"
+DEFAULT_MODEL = PROJECT / "config" / "rig_default.yaml"
+
+
+def ros_environment(domain_id: int | None = None) -> dict[str, str]:
+    """The environment of a node process: loopback discovery, the run's domain."""
+    env = dict(os.environ)
+    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    env["ROS_DOMAIN_ID"] = str(choose_domain_id() if domain_id is None else domain_id)
+    env["PYTHONUNBUFFERED"] = "1"
+    return env
+
+
+def choose_domain_id() -> int:
+    """A domain id (1-100) unlikely to be shared with another run on this host."""
+    return 1 + (os.getpid() * 7919 + time.time_ns() // 1_000_000) % 100
+
+
+def node_available(name: str) -> bool:
+    """True when ``brake_hil.nodes.<name>`` exists."""
+    return importlib.util.find_spec(f"brake_hil.nodes.{name}") is not None
+
+
+@dataclass
+class NodeProcess:
+    """One running node."""
+
+    name: str
+    process: subprocess.Popen[bytes]
+    log: Path
+
+    def returncode(self) -> int | None:
+        """Exit status, None while running."""
+        return self.process.poll()
+
+    def cpu_seconds(self) -> float | None:
+        """User plus system CPU time so far (s), None once it has exited (Linux /proc)."""
+        try:
+            fields = Path(f"/proc/{self.process.pid}/stat").read_text().rsplit(")", 1)[1].split()
+        except (OSError, IndexError):
+            return None
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def start_node(
+    name: str,
+    parameters: Mapping[str, Any],
+    env: Mapping[str, str],
+    workdir: Path,
+    fifo_priority: int = 0,
+) -> NodeProcess:
+    """Start ``brake_hil.nodes.<name>`` with ``parameters`` (written to a params file).
+
+    ``fifo_priority`` > 0 starts the whole process under ``SCHED_FIFO`` at that priority (as
+    ``chrt -f`` would; needs CAP_SYS_NICE, else the node runs normally).
+    """
+    workdir.mkdir(parents=True, exist_ok=True)
+    params = workdir / f"{name}.params.yaml"
+    params.write_text(
+        yaml.safe_dump({name: {"ros__parameters": dict(parameters)}}), encoding="utf-8"
+    )
+    log = workdir / f"{name}.log"
+    command = [
+        sys.executable,
+        "-m",
+        f"brake_hil.nodes.{name}",
+        "--ros-args",
+        "--params-file",
+        str(params),
+    ]
+    with log.open("wb") as stream:
+        process = subprocess.Popen(
+            command,
+            env=dict(env),
+            stdout=stream,
+            stderr=subprocess.STDOUT,
+            start_new_session=True,
+            preexec_fn=(lambda: set_realtime_priority(fifo_priority)) if fifo_priority else None,
+        )
+    return NodeProcess(name, process, log)
+
+
+def stop_node(node: NodeProcess, timeout_s: float = 10.0) -> int:
+    """SIGINT, then SIGTERM, then SIGKILL, each after ``timeout_s``; the exit status."""
+    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGKILL):
+        if node.process.poll() is not None:
+            break
+        node.process.send_signal(sig)
+        try:
+            node.process.wait(timeout_s)
+        except subprocess.TimeoutExpired:
+            continue
+    return node.process.wait()
+
+
+@dataclass
+class ChainResult:
+    """What a chain run produced."""
+
+    out_dir: Path
+    comparator: dict[str, Any] | None = None  # comparator summary
+    model: dict[str, Any] | None = None  # caliper model timing statistics
+    bag: Path | None = None  # the recorder's MCAP directory
+    check: dict[str, float] | None = None  # recorded predictions against the batch model
+    missing: list[str] = field(default_factory=list)  # nodes not available
+    exit_codes: dict[str, int] = field(default_factory=dict)
+    cpu_s: dict[str, float] = field(default_factory=dict)  # CPU time of each node (s)
+    wall_s: float = 0.0  # from the source's start to the stop (s)
+
+
+def run_chain(
+    recording: Path,
+    model_file: Path = DEFAULT_MODEL,
+    out_dir: Path = PROJECT / "out" / "chain",
+    rate: float = 1.0,
+    domain_id: int | None = None,
+    echo: Callable[[str], None] = print,
+    recorder: bool = True,
+    realtime_priority: int = 0,
+) -> ChainResult:
+    """Run the chain on ``recording`` once; see the module docstring."""
+    source = read_recording(recording, required=(MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS))
+    mean_pressure = float(np.mean(source.master_cylinder_pressure))
+    load_model(model_file, mean_pressure)  # a bad model file fails here, with one line
+    length_s = float(source.time[-1])
+    env = ros_environment(domain_id)
+    logs = out_dir / "logs"
+    result = ChainResult(out_dir)
+    has_recorder = recorder and node_available("recorder")
+    if recorder and not has_recorder:
+        result.missing.append("recorder")
+        echo("recorder node not available: running without recording")
+    bag_name = "chain_" + datetime.now(UTC).strftime("%Y_%m_%d-%H_%M_%S")
+    subscribers = 2 if has_recorder else 1
+    nodes: list[NodeProcess] = []
+    echo(
+        f"chain on {recording} ({length_s:.1f} s at rate {rate:g}), model {model_file}, "
+        f"ROS_DOMAIN_ID {env['ROS_DOMAIN_ID']}"
+    )
+    try:
+        if has_recorder:
+            nodes.append(
+                start_node(
+                    "recorder", {"output_dir": str(out_dir), "bag_name": bag_name}, env, logs
+                )
+            )
+        nodes.append(
+            start_node("comparator", {"summary_file": str(out_dir / "comparator.json")}, env, logs)
+        )
+        model_parameters = {
+            "model_file": str(model_file),
+            "mean_pressure": mean_pressure,
+            "statistics_file": str(out_dir / "caliper_model.json"),
+            "realtime_priority": realtime_priority,
+        }
+        nodes.append(start_node("caliper_model", model_parameters, env, logs))
+        source_parameters = {
+            "recording": str(recording),
+            "rate": float(rate),
+            "exit_at_end": True,
+            "wait_for_subscribers": subscribers,
+            "wait_for_topics": [f"{spec.name}:{subscribers}" for spec in PREDICTED_OUTPUTS],
+            "wait_timeout": 30.0,
+            "start_delay": 1.0,
+            "realtime_priority": realtime_priority,
+        }
+        player = start_node("pressure_source", source_parameters, env, logs)
+        nodes.append(player)
+        started = time.monotonic()
+        try:
+            player.process.wait(length_s / rate + 45.0)
+        except subprocess.TimeoutExpired:
+            echo("pressure_source did not finish in time: stopping it")
+        time.sleep(1.0)  # the model drains, the comparator scores its last cycle
+        result.wall_s = time.monotonic() - started
+    finally:
+        for node in reversed(nodes):  # source, model, comparator, recorder
+            cpu = node.cpu_seconds()
+            if cpu is not None:
+                result.cpu_s[node.name] = cpu
+            if node.name == "recorder":
+                time.sleep(1.0)  # let it write what it has queued
+            result.exit_codes[node.name] = stop_node(node)
+    failed = {name: code for name, code in result.exit_codes.items() if code != 0}
+    if failed:
+        echo(f"nodes exited with errors: {failed}; logs in {logs}")
+    result.comparator = _read_json(out_dir / "comparator.json")
+    result.model = _read_json(out_dir / "caliper_model.json")
+    if has_recorder and (out_dir / bag_name / "metadata.yaml").is_file():
+        result.bag = out_dir / bag_name
+        try:
+            result.check = check_recorded_predictions(result.bag, model_file, mean_pressure)
+        except BrakeHilError as err:
+            echo(f"the recording cannot be checked: {err}")
+    _print_result(result, echo)
+    return result
+
+
+def _read_json(path: Path) -> dict[str, Any] | None:
+    try:
+        document = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return document if isinstance(document, dict) else None
+
+
+def check_recorded_predictions(
+    bag: Path, model_file: Path, mean_pressure: float
+) -> dict[str, float]:
+    """Recorded predictions against the batch model on the recorded ``p_i``.
+
+    Returns the input and prediction counts and, per channel, the largest deviation over the
+    batch output's peak-to-peak (float rounding: ~1e-13).
+    """
+    recorded = read_recording(bag, required=(MASTER_CYLINDER_PRESSURE, *PREDICTED_OUTPUTS))
+    topics = {t.name: t for t in _topics(bag)}
+    batch = load_model(model_file, mean_pressure).batch(recorded.master_cylinder_pressure)
+    predicted = (
+        recorded.predicted_bore_pressure,
+        recorded.predicted_block_force,
+        recorded.predicted_caliper_displacement,
+    )
+    check: dict[str, float] = {
+        "inputs": float(topics[MASTER_CYLINDER_PRESSURE.name].message_count),
+        "predictions": float(topics[PREDICTED_OUTPUTS[0].name].message_count),
+    }
+    if check["inputs"] != check["predictions"]:
+        return check  # samples missing from the recording: no sample-for-sample comparison
+    for channel, live, offline in zip(OUTPUT_CHANNELS, predicted, batch):
+        assert live is not None
+        check[f"max_dev_{channel}"] = float(np.max(np.abs(live - offline)) / np.ptp(offline))
+    return check
+
+
+def _topics(bag: Path) -> list[Any]:
+    from brake_hil.io.recording_reader import list_topics
+
+    return list_topics(bag)
+
+
+def _print_result(result: ChainResult, echo: Callable[[str], None]) -> None:
+    comparator = result.comparator
+    if comparator is None:
+        echo("no comparator summary")
+    else:
+        window = comparator["window_cycles"]
+        echo(f"comparison (comparator: means over steady cycles, window of {window} cycles)")
+        echo(
+            f"{'channel':8s}{'ptp ratio %':>13s}{'tau/T %':>10s}{'NRMSE':>9s}{'cycles':>8s}  level"
+        )
+        for channel, entry in comparator["metrics"].items():
+            if entry.get("cycles"):
+                echo(
+                    f"{channel:8s}{entry['ptp_ratio_pct']:13.1f}{entry['tau_over_T_pct']:10.2f}"
+                    f"{entry['nrmse']:9.4f}{entry['cycles']:8d}  {entry['level']}"
+                )
+            else:
+                echo(f"{channel:8s}  no steady cycle scored")
+    model = result.model
+    if model is not None:
+        counters = model["counters"]
+        period, latency = model["period_error"], model["latency"]
+        echo(
+            f"caliper_model: {counters['samples']} samples in, {counters['predictions']} "
+            f"predictions out; period error median {period['median_us']:.0f} us, p99 "
+            f"{period['p99_us']:.0f} us, max {period['max_us']:.0f} us; latency median "
+            f"{latency['median_us']:.0f} us, p99 {latency['p99_us']:.0f} us; "
+            f"{counters['overruns']} overruns"
+        )
+    if result.cpu_s:
+        echo(
+            "CPU time (s) per node: "
+            + ", ".join(f"{name} {seconds:.1f}" for name, seconds in result.cpu_s.items())
+        )
+    if result.bag is not None:
+        echo(f"MCAP recording: {result.bag}")
+        check = result.check
+        if check is not None:
+            counts = (
+                f"recorded {int(check['inputs'])} inputs, {int(check['predictions'])} predictions"
+            )
+            if "max_dev_p_b" in check:
+                deviations = ", ".join(f"{c} {check[f'max_dev_{c}']:.1e}" for c in OUTPUT_CHANNELS)
+                echo(f"{counts}; largest deviation from the batch model (of ptp): {deviations}")
+            else:
+                echo(f"{counts}: the recording misses samples, no comparison with the batch")
+    elif "recorder" in result.missing:
+        echo("no MCAP: the recorder node is not available")
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m brake_hil.nodes.chain``."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("recording", type=Path, nargs="?", default=DEFAULT_RECORDING)
+    parser.add_argument("--model", type=Path, default=DEFAULT_MODEL, help="model file (rig YAML)")
+    parser.add_argument("--out", type=Path, default=PROJECT / "out" / "chain")
+    parser.add_argument("--rate", type=float, default=1.0, help="replay rate factor")
+    parser.add_argument("--domain-id", type=int, default=None)
+    parser.add_argument("--no-recorder", action="store_true", help="run without the recorder")
+    parser.add_argument(
+        "--realtime-priority",
+        type=int,
+        default=0,
+        help="SCHED_FIFO priority of the source's and the model's loop threads (0: none)",
+    )
+    args = parser.parse_args(argv)
+    try:
+        result = run_chain(
+            args.recording,
+            args.model,
+            args.out,
+            args.rate,
+            args.domain_id,
+            recorder=not args.no_recorder,
+            realtime_priority=args.realtime_priority,
+        )
+    except BrakeHilError as err:
+        print(f"chain: error: {err}", file=sys.stderr)
+        return 2
+    return 1 if any(code != 0 for code in result.exit_codes.values()) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,315 @@
+"""Comparator node: predicted against measured, live, with the seed's metrics.
+
+Subscribes to the measured ``/brake/bore/pressure``, ``/brake/block/force``,
+``/brake/caliper/displacement`` and the predicted ``/brake/model/...`` topics, pairs
+predicted with measured samples by stamp (:class:`~brake_hil.core.regression.StampPairer`),
+and once per excitation cycle (5 Hz) publishes, for each channel, the seed's Table 4-5 metrics
+(peak-to-peak ratio %, ``tau/T`` %, NRMSE) of that cycle and of the rolling window of
+``window_cycles`` cycles ending with it (:func:`~brake_hil.core.regression.evaluate_cycle`:
+both sides low-passed at 30 Hz, zero phase, steady pulsing only; one guard cycle after it,
+so figures lag a cycle) as ``diagnostic_msgs/msg/DiagnosticArray`` on ``/brake/comparison``
+and ``/diagnostics``. Cycles lie on a grid of stamps, from the first paired sample, moved
+once (by under half a period) to start at a peak of the measured bore pressure, so that
+each cycle holds both mean crossings; a late timer scores every cycle that fell due, so none
+is skipped. Levels
+come from :class:`~brake_hil.core.regression.Thresholds` on the window's metrics: OK, WARN,
+ERROR; STALE while there is nothing paired; OK with "not steady" during ramps and pauses.
+
+One thread does the node's work: every quarter cycle (50 ms) it takes what the six subscriptions
+hold (no Python callback per message: six 1 kHz topics cost a few per cent of a core), and
+once a cycle it scores. There is no executor, hence no parameter services: the
+parameters are read-only, set at start.
+
+Parameters (``config/nodes.yaml``): ``excitation_hz`` (5.0), ``window_cycles`` (10),
+``sample_period`` (s, 0.001), ``ptp_ratio_warn_pct`` (10) / ``ptp_ratio_error_pct`` (25):
+``|ratio - 100|``; ``tau_over_T_warn_pct`` (2.5) / ``tau_over_T_error_pct`` (5): ``|tau/T|``;
+``nrmse_warn`` (0.15) / ``nrmse_error`` (0.3); ``summary_file`` (str, ""): at shutdown, the
+run's per-channel means over every steady cycle scored, as JSON.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+import json
+import math
+from pathlib import Path
+import struct
+import sys
+from typing import Any
+
+from diagnostic_msgs.msg import DiagnosticArray
+import numpy as np
+import rclpy
+from rclpy.exceptions import ParameterException
+from rclpy.node import Node
+
+from brake_hil.core.realtime import DeadlineLoop, Tick
+from brake_hil.core.regression import (
+    METRIC_KEYS,
+    PairedWindow,
+    StampPairer,
+    Thresholds,
+    WindowResult,
+    evaluate_cycle,
+    peak_stamp_ns,
+)
+from brake_hil.errors import BrakeHilError
+from brake_hil.nodes import common
+from brake_hil.topics import MEASURED_OUTPUTS, OUTPUT_CHANNELS, PREDICTED_OUTPUTS
+
+NAME = "comparator"
+
+
+class ComparatorNode(Node):
+    """Pairs predictions with measurements by stamp and scores them once a cycle."""
+
+    def __init__(self) -> None:
+        # One thread does all the work (no executor, so no parameter services): it takes the
+        # six 1 kHz topics in batches every 50 ms, without a Python callback per message.
+        super().__init__(NAME, start_parameter_services=False)
+        declare = common.declare
+        excitation_hz = float(declare(self, "excitation_hz", 5.0, "excitation frequency, Hz"))
+        self._window_cycles = int(declare(self, "window_cycles", 10, "rolling window, cycles"))
+        sample_period = float(declare(self, "sample_period", 0.001, "sample period, s"))
+        defaults = Thresholds()
+        self.thresholds = Thresholds(
+            **{
+                name: float(declare(self, name, getattr(defaults, name), "level threshold"))
+                for name in defaults.__dataclass_fields__
+            }
+        )
+        self._summary_file = declare(self, "summary_file", "", "run summary JSON at exit")
+        if not excitation_hz > 0.0 or self._window_cycles < 1 or not sample_period > 0.0:
+            raise BrakeHilError("excitation_hz, window_cycles and sample_period must be > 0")
+        self.period_s = 1.0 / excitation_hz
+        self._sample_period_ns = round(sample_period * 1e9)
+        span = round((self._window_cycles + 2) * self.period_s / sample_period)
+        self.pairers = {
+            channel: StampPairer(capacity=span + 500, max_pending=max(2000, span))
+            for channel in OUTPUT_CHANNELS
+        }
+        self.cycles: dict[str, list[dict[str, float]]] = {c: [] for c in OUTPUT_CHANNELS}
+        self._period_ns = round(self.period_s * 1e9)
+        self._next_cycle_end: int | None = None  # stamp (ns) ending the next cycle to score
+        self._aligned = False  # cycles start at a peak of p_b (after the first steady window)
+        self.evaluations = 0  # cycles evaluated
+        self.corrupt = 0  # messages too short to decode
+        self.evaluation_errors = 0  # windows whose scoring raised
+        self._inputs: list[tuple[common.PolledInput, Callable[[int, float], None]]] = []
+        topics = zip(OUTPUT_CHANNELS, MEASURED_OUTPUTS, PREDICTED_OUTPUTS)
+        for channel, measured, predicted in topics:
+            pairer = self.pairers[channel]
+            self._inputs.append((common.PolledInput(self, measured), pairer.add_measured))
+            self._inputs.append((common.PolledInput(self, predicted), pairer.add_predicted))
+        self._outputs = [
+            self.create_publisher(DiagnosticArray, topic, common.DIAGNOSTICS_QOS)
+            for topic in (common.COMPARISON_TOPIC, common.DIAGNOSTICS_TOPIC)
+        ]
+        self._evaluate_every = 4  # takes (of 50 ms) per evaluation
+        self._loop = DeadlineLoop(
+            self._tick,
+            period_ns=self._period_ns // self._evaluate_every,
+            spin_ns=0,
+            on_error=self._on_loop_error,
+            name="comparator-loop",
+        )
+        self._loop.start()
+
+    def _tick(self, tick: Tick) -> None:
+        self._take()
+        if tick.slot % self._evaluate_every == 0 or tick.skipped:
+            self._evaluate()
+
+    def _take(self) -> None:
+        for polled, add in self._inputs:
+            read = polled.read
+            for data, _ in polled.take_all():
+                try:
+                    stamp, value = read(data)
+                except (struct.error, IndexError):
+                    self.corrupt += 1
+                    continue
+                add(stamp, value)
+
+    @property
+    def running(self) -> bool:
+        """True while the comparator's loop runs."""
+        return self._loop.running
+
+    @property
+    def loop_error(self) -> BaseException | None:
+        """What stopped the loop, None while it runs or after a clean stop."""
+        return self._loop.error
+
+    def _on_loop_error(self, error: BaseException) -> None:
+        if self.context.ok():
+            self.get_logger().fatal(f"comparator loop stopped: {type(error).__name__}: {error}")
+
+    def _evaluate(self) -> None:
+        """Score every cycle whose window (and guard period) the paired samples now cover."""
+        windows = {channel: pairer.window() for channel, pairer in self.pairers.items()}
+        newest = [int(w.stamps_ns[-1]) for w in windows.values() if w.stamps_ns.size]
+        if not newest:
+            self._publish(self._statuses(windows, None)[0])
+            return
+        if self._next_cycle_end is None:
+            first = min(int(w.stamps_ns[0]) for w in windows.values() if w.stamps_ns.size)
+            self._next_cycle_end = first + (self._window_cycles + 1) * self._period_ns
+        published = False
+        while self._next_cycle_end + self._period_ns <= max(newest):
+            statuses, steady = self._statuses(windows, self._next_cycle_end)
+            self._publish(statuses)
+            self._next_cycle_end += self._period_ns
+            published = True
+            if steady and not self._aligned:
+                self._align(windows[OUTPUT_CHANNELS[0]])
+        if not published and self.evaluations == 0:
+            self._publish(self._statuses(windows, None)[0])
+
+    def _align(self, window: PairedWindow) -> None:
+        """Once: move the cycle grid (by under half a period) so cycles start at a peak of
+        the measured bore pressure, which puts both mean crossings well inside each cycle."""
+        assert self._next_cycle_end is not None
+        span = (self._window_cycles + 2) * self._period_ns
+        keep = window.stamps_ns > window.stamps_ns[-1] - span
+        peak = peak_stamp_ns(PairedWindow(*(part[keep] for part in window)), self.period_s)
+        half = self._period_ns // 2
+        cycles = -((peak - (self._next_cycle_end - half)) // self._period_ns)  # ceil
+        self._next_cycle_end = peak + cycles * self._period_ns
+        self._aligned = True
+
+    def _statuses(self, windows: dict[str, Any], cycle_end: int | None) -> tuple[list[Any], bool]:
+        """The array for the cycle ending at ``cycle_end``; and whether p_b was steady."""
+        statuses = []
+        worst = common.OK
+        steady = False
+        for channel, window in windows.items():
+            if cycle_end is None:
+                result = WindowResult(False, None, None, "filling the window")
+            else:
+                try:
+                    result = evaluate_cycle(
+                        window,
+                        cycle_end,
+                        self.period_s,
+                        self._window_cycles,
+                        self._sample_period_ns,
+                    )
+                except ValueError as err:  # a numerical edge case: report it, keep running
+                    self.evaluation_errors += 1
+                    result = WindowResult(False, None, None, f"evaluation failed: {err}")
+                if result.steady and result.cycle is not None:
+                    self.cycles[channel].append(result.cycle)
+                steady = steady or (channel == OUTPUT_CHANNELS[0] and result.steady)
+            status, level = self._status(channel, self.pairers[channel], result, cycle_end)
+            statuses.append(status)
+            if level != common.STALE:
+                worst = max(worst, level)
+        self.evaluations += cycle_end is not None
+        scored = min(len(cycles) for cycles in self.cycles.values())
+        statuses.append(
+            common.diagnostic_status(
+                f"{NAME}: summary",
+                worst,
+                f"{scored} steady cycles scored",
+                {
+                    "cycles_evaluated": self.evaluations,
+                    "cycles_scored": scored,
+                    "corrupt_messages": self.corrupt,
+                    "evaluation_errors": self.evaluation_errors,
+                },
+            )
+        )
+        return statuses, steady
+
+    def _publish(self, statuses: list[Any]) -> None:
+        array = common.diagnostic_array(self, statuses)
+        for publisher in self._outputs:
+            publisher.publish(array)
+
+    def _status(
+        self, channel: str, pairer: StampPairer, result: WindowResult, cycle_end: int | None
+    ) -> tuple[Any, int]:
+        pending_predicted, pending_measured = pairer.pending
+        values: list[tuple[str, object]] = [
+            ("paired", pairer.paired),
+            ("unpaired_predicted", pairer.unpaired_predicted),
+            ("unpaired_measured", pairer.unpaired_measured),
+            ("pending_predicted", pending_predicted),
+            ("pending_measured", pending_measured),
+            ("cycle_end_stamp_ns", -1 if cycle_end is None else cycle_end),
+            ("window_cycles", self._window_cycles),
+        ]
+        if result.window is None:
+            level = common.STALE if pairer.paired == 0 else common.OK
+            message = result.reason
+        else:
+            level = self.thresholds.level(result.window)
+            window = result.window
+            message = (
+                f"ptp {window['ptp_ratio_pct']:.1f} %, tau/T {window['tau_over_T_pct']:.2f} %, "
+                f"NRMSE {window['nrmse']:.3f} over {self._window_cycles} cycles"
+            )
+            values += [(f"window_{key}", window[key]) for key in METRIC_KEYS]
+            if result.cycle is not None:
+                values += [(f"cycle_{key}", result.cycle[key]) for key in METRIC_KEYS]
+                cycle_level = self.thresholds.level(result.cycle)
+                values.append(("cycle_level", common.LEVEL_NAMES[cycle_level]))
+            else:
+                values.append(("cycle_note", result.reason))
+        return common.diagnostic_status(f"{NAME}: {channel}", level, message, values), level
+
+    def summary(self) -> dict[str, Any]:
+        """The run so far: per channel, the means of every steady cycle scored."""
+        channels: dict[str, Any] = {}
+        for channel, cycles in self.cycles.items():
+            entry: dict[str, Any] = {"cycles": len(cycles)}
+            if cycles:
+                for key in METRIC_KEYS:
+                    entry[key] = float(np.mean([cycle[key] for cycle in cycles]))
+                entry["level"] = common.LEVEL_NAMES[self.thresholds.level(entry)]
+            pairer = self.pairers[channel]
+            entry["paired"] = pairer.paired
+            entry["unpaired"] = pairer.unpaired_predicted + pairer.unpaired_measured
+            channels[channel] = entry
+        return {"window_cycles": self._window_cycles, "metrics": channels}
+
+    def close(self) -> None:
+        """Stop the loop, score what has arrived, log the summary and write it."""
+        self._loop.stop()
+        if self.context.ok() and self._loop.error is None:
+            self._take()
+            self._evaluate()
+        summary = self.summary()
+        for channel, entry in summary["metrics"].items():
+            if entry["cycles"]:
+                text = ", ".join(
+                    f"{key} {entry[key]:.4g}" for key in METRIC_KEYS if math.isfinite(entry[key])
+                )
+                self.get_logger().info(f"{channel}: {text} over {entry['cycles']} cycles")
+        if self._summary_file:
+            path = Path(self._summary_file)
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+
+
+def main(args: list[str] | None = None) -> int:
+    """Entry point ``comparator``: run until SIGINT/SIGTERM."""
+    common.init_ros(args)
+    try:
+        node = ComparatorNode()
+    except (BrakeHilError, ParameterException) as err:
+        print(f"{NAME}: error: {err}", file=sys.stderr)
+        rclpy.shutdown()
+        return 2
+    try:
+        common.wait_for_signal(lambda: not node.running)
+    finally:
+        node.close()
+        node.destroy_node()
+        rclpy.shutdown()
+    return 0 if node.loop_error is None else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,445 @@
+"""Pressure source node: the rig's input ``p_i`` (and its measurements) on the ROS graph.
+
+Publishes ``/brake/master_cylinder/pressure`` and, when the source has them, the measured
+``/brake/bore/pressure``, ``/brake/block/force``, ``/brake/caliper/displacement`` (and
+``/brake/air/pressure``), one message per sample, ``header.stamp`` = the sample's acquisition
+time. Two modes:
+
+``replay``
+    A recording (rosbag2 directory, ``.mcap`` or ``.db3``; read by
+    :func:`~brake_hil.io.recording_reader.read_recording`) played paced by its samples'
+    stamps, at real time or ``rate`` times it, from ``start_offset`` for ``duration``,
+    optionally looped. Samples are published at absolute deadlines (monotonic clock, sleep
+    then spin); a late wake-up publishes the samples that fell due back to back, never skips
+    one. Stamps (``stamp_mode``): ``shift`` (default) moves every recorded stamp by one offset
+    so the first replayed sample is stamped with the wall-clock time of its publication: at
+    rate 1 each stamp is the time the sample is "acquired" on this host, as live data would be,
+    and the spacing is the recording's. ``keep`` publishes the recorded stamps. Each further
+    loop pass adds the recording's span plus one sample interval, so stamps always increase.
+    Topics are renamed with ROS remapping (``--ros-args -r /brake/bore/pressure:=/rig2/p_b``).
+
+``can``
+    The rig's DAQ over CAN (python-can ``can_interface``/``can_channel``/``can_bitrate``), frames
+    decoded with the DBC ``dbc_file`` by :class:`~brake_hil.io.can_daq.CanDaq` into ``p_i``,
+    ``p_b``, ``F_k``, ``x_c`` (and ``p_a``), stamped with their acquisition time (the DAQ's
+    sample counter on the host clock). Every decoded sample is published once; nothing is
+    ever republished, so a silent bus publishes nothing. The DAQ's health is checked after
+    every poll (at most 1 ms apart): a silent or stale input (no good frame for
+    ``stale_after_ms``), bus errors and a lost adapter change the ``pressure_source: daq``
+    diagnostic at once (within ``stale_after_ms`` + 1 ms); a lost adapter is reopened with
+    backoff, without crashing.
+
+Parameters (``config/nodes.yaml``):
+
+- ``mode`` (``replay`` | ``can``), ``publish_measured`` (true: also ``p_b``, ``F_k``, ``x_c``,
+  ``p_a``), ``frame_id`` (``caliper``), ``spin_margin_us`` (50: replay pacing needs no
+  tighter timing than the kernel's wake-up), ``realtime_priority`` (0:
+  normal scheduling; else SCHED_FIFO for the replay/acquisition thread, the node's other
+  threads one below), ``diagnostics_period`` (s, 1.0), ``statistics_file`` (""; else counts
+  and replay timing as JSON at shutdown).
+- replay: ``recording`` (path), ``rate`` (1.0), ``loop`` (false), ``start_offset`` (s, 0),
+  ``duration`` (s, 0: to the end), ``stamp_mode`` (``shift`` | ``keep``), ``exit_at_end``
+  (false: the node stays up after the replay), ``wait_for_subscribers`` (0: start once every
+  published topic has this many subscribers), ``wait_for_topics`` (``/topic`` or
+  ``/topic:N``: and these have one, or N), ``wait_timeout`` (s, 10: start anyway after it),
+  ``start_delay`` (s, 0.5, after the wait).
+- can: ``can_interface`` (``virtual``), ``can_channel``, ``can_bitrate`` (1000000),
+  ``dbc_file`` (``config/brake_rig.dbc``), ``stale_after_ms`` (5.0), ``can_sleep_after_open``
+  (s, 0; slcan only: some USB adapters reset when opened).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+import json
+from pathlib import Path
+import sys
+import threading
+import time
+from typing import Any
+
+from diagnostic_msgs.msg import DiagnosticArray
+import rclpy
+from rclpy.exceptions import ParameterException
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+
+from brake_hil.core.realtime import (
+    LoopStatistics,
+    StampMode,
+    loop_span_ns,
+    replay_deadlines,
+    set_process_realtime_priority,
+    set_realtime_priority,
+    set_timer_slack,
+    sleep_until,
+)
+from brake_hil.core.recording import Recording
+from brake_hil.errors import BrakeHilError
+from brake_hil.io.recording_reader import read_recording
+from brake_hil.nodes import common
+from brake_hil.topics import (
+    AIR_PRESSURE,
+    BLOCK_FORCE,
+    BORE_PRESSURE,
+    CALIPER_DISPLACEMENT,
+    MASTER_CYLINDER_PRESSURE,
+    TopicSpec,
+)
+
+NAME = "pressure_source"
+QUANTITY_TOPICS: dict[str, TopicSpec] = {
+    spec.quantity: spec
+    for spec in (
+        MASTER_CYLINDER_PRESSURE,
+        BORE_PRESSURE,
+        BLOCK_FORCE,
+        CALIPER_DISPLACEMENT,
+        AIR_PRESSURE,
+    )
+}
+"""The topic of each quantity a source may carry."""
+
+
+def replay_channels(recording: Recording, publish_measured: bool) -> dict[TopicSpec, Any]:
+    """The recording's channels to publish, keyed by topic (``p_i`` first)."""
+    channels: dict[TopicSpec, Any] = {MASTER_CYLINDER_PRESSURE: recording.master_cylinder_pressure}
+    if publish_measured:
+        for spec, values in (
+            (BORE_PRESSURE, recording.bore_pressure),
+            (BLOCK_FORCE, recording.block_force),
+            (CALIPER_DISPLACEMENT, recording.caliper_displacement),
+            (AIR_PRESSURE, recording.air_pressure),
+        ):
+            if values is not None:
+                channels[spec] = values
+    return channels
+
+
+class PressureSourceNode(Node):
+    """Replays a recording, or acquires from the rig's CAN DAQ, onto the contract topics."""
+
+    def __init__(self) -> None:
+        super().__init__(NAME)
+        declare = common.declare
+        self.mode = declare(self, "mode", "replay", "replay | can")
+        recording = declare(self, "recording", "", "replay: the recording to play")
+        self._rate = float(declare(self, "rate", 1.0, "replay: rate factor (2.0: twice as fast)"))
+        self._loop = declare(self, "loop", False, "replay: start again at the end")
+        self._exit_at_end = declare(self, "exit_at_end", False, "replay: exit when finished")
+        self._start_offset = float(declare(self, "start_offset", 0.0, "replay: skip, s"))
+        self._duration = float(declare(self, "duration", 0.0, "replay: play this long, s"))
+        stamp_mode = declare(self, "stamp_mode", StampMode.SHIFT.value, "replay: shift | keep")
+        publish_measured = declare(self, "publish_measured", True, "also publish p_b, F_k, x_c")
+        self._frame_id = declare(self, "frame_id", "caliper", "header.frame_id")
+        self._wait_count = declare(self, "wait_for_subscribers", 0, "subscribers per topic")
+        self._wait_topics = self.declare_parameter("wait_for_topics", Parameter.Type.STRING_ARRAY)
+        self._wait_timeout = float(declare(self, "wait_timeout", 10.0, "longest wait, s"))
+        self._start_delay = float(declare(self, "start_delay", 0.5, "delay after the wait, s"))
+        self._spin_ns = 1000 * declare(self, "spin_margin_us", 50, "spin before deadlines, us")
+        self._priority = declare(self, "realtime_priority", 0, "SCHED_FIFO priority, 0: none")
+        report_s = declare(self, "diagnostics_period", 1.0, "diagnostics period, s")
+        self._statistics_file = declare(self, "statistics_file", "", "counts JSON at exit")
+        self._can = {
+            "interface": declare(self, "can_interface", "virtual", "can: python-can interface"),
+            "channel": declare(self, "can_channel", "brake_hil", "can: python-can channel"),
+            "bitrate": declare(self, "can_bitrate", 1_000_000, "can: bit/s"),
+            "dbc_path": declare(
+                self, "dbc_file", str(common.config_path("brake_rig.dbc")), "can: DBC file"
+            ),
+            "stale_after_s": declare(self, "stale_after_ms", 5.0, "can: stale after, ms") / 1e3,
+            "sleep_after_open": declare(
+                self, "can_sleep_after_open", 0.0, "can: slcan wait after opening, s"
+            ),
+        }
+        if self._rate <= 0.0:
+            raise BrakeHilError(f"rate must be positive, got {self._rate}")
+
+        self.statistics = LoopStatistics()
+        self.published = 0  # samples (p_i messages)
+        self.passes = 0  # replay passes completed
+        self.state = "starting"
+        self._stop = threading.Event()
+        self.exit_requested = threading.Event()  # set at the end of a replay with exit_at_end
+        self._diagnostics = self.create_publisher(
+            DiagnosticArray, common.DIAGNOSTICS_TOPIC, common.DIAGNOSTICS_QOS
+        )
+        self._outputs: dict[TopicSpec, Any] = {}
+        self._builders: dict[TopicSpec, common.RawMessageBuilder] = {}
+        self._daq: Any = None
+        if self.mode == "replay":
+            self._prepare_replay(recording, stamp_mode, publish_measured)
+            target: Callable[[], None] = self._replay
+        elif self.mode == "can":
+            self._prepare_can(publish_measured)
+            target = self._acquire
+        else:
+            raise BrakeHilError(f"mode must be replay or can, got {self.mode!r}")
+        self.create_timer(report_s, self._report)
+        if self._priority > 0:  # the worker one step above the node's other threads
+            set_process_realtime_priority(max(1, self._priority - 1))
+        self._thread = threading.Thread(target=self._guarded(target), name=NAME, daemon=True)
+        self._thread.start()
+
+    def _advertise(self, specs: list[TopicSpec]) -> None:
+        for spec in specs:
+            self._outputs[spec] = self.create_publisher(
+                common.message_class(spec), spec.name, common.SAMPLE_QOS
+            )
+            self._builders[spec] = common.RawMessageBuilder(spec, self._frame_id)
+
+    def _guarded(self, target: Callable[[], None]) -> Callable[[], None]:
+        def run() -> None:
+            try:
+                target()
+            except Exception as err:  # noqa: BLE001 - reported; the node stays up
+                if self.context.ok():
+                    self.state = f"failed: {err}"
+                    self.get_logger().error(f"{self.mode} stopped: {type(err).__name__}: {err}")
+                    self._report()
+
+        return run
+
+    # -- replay ------------------------------------------------------------------------
+
+    def _prepare_replay(self, path: str, stamp_mode: str, publish_measured: bool) -> None:
+        if not path:
+            raise BrakeHilError("replay mode needs the parameter 'recording'")
+        try:
+            self._stamp_mode = StampMode(stamp_mode)
+        except ValueError as err:
+            raise BrakeHilError(f"stamp_mode must be shift or keep, got {stamp_mode!r}") from err
+        recording = read_recording(path)
+        time_s = recording.time
+        keep = time_s >= self._start_offset - 1e-9
+        if self._duration > 0.0:
+            keep &= time_s < self._start_offset + self._duration - 1e-9
+        if keep.sum() < 2:
+            raise BrakeHilError(
+                f"{path}: start_offset {self._start_offset} s and duration {self._duration} s "
+                f"leave fewer than 2 of its {time_s.size} samples ({time_s[-1]:.3f} s long)"
+            )
+        stamps = recording.start_stamp_ns + (time_s[keep] * 1e9).round().astype("int64")
+        channels = replay_channels(recording, publish_measured)
+        self._stamps = stamps
+        self._values = {spec: values[keep].tolist() for spec, values in channels.items()}
+        self._advertise(list(channels))
+        self.recording = recording
+        self.get_logger().info(
+            f"replaying {path}: {stamps.size} samples of {', '.join(s.name for s in channels)} "
+            f"at rate {self._rate:g}{', looped' if self._loop else ''}"
+        )
+
+    def _wait_for_graph(self) -> None:
+        """Wait (bounded) for the subscribers the parameters ask for.
+
+        On the source's own topics the count is of subscriptions matched by its publisher
+        (what the middleware will deliver to); on other topics, of subscriptions on the graph.
+        """
+        own = {pub.topic_name: pub for pub in self._outputs.values()}
+        topics = dict.fromkeys(own, int(self._wait_count))
+        for entry in self._wait_topics.value or []:
+            if not entry.strip():
+                continue
+            name, _, count = entry.strip().partition(":")
+            topics[name] = max(topics.get(name, 0), int(count or 1))
+
+        def count(name: str) -> int:
+            publisher = own.get(name)
+            if publisher is not None:
+                return int(publisher.get_subscription_count())
+            return int(self.count_subscribers(name))
+
+        deadline = time.monotonic() + self._wait_timeout
+        while not self._stop.is_set():
+            short = {n: c for n, c in topics.items() if count(n) < c}
+            if not short:
+                return
+            if time.monotonic() > deadline:
+                self.get_logger().warning(f"starting without all subscribers: {sorted(short)}")
+                return
+            self.state = "waiting for subscribers"
+            time.sleep(0.02)
+
+    def _replay(self) -> None:
+        set_timer_slack(1)
+        set_realtime_priority(self._priority)
+        self._wait_for_graph()
+        self._stop.wait(self._start_delay)
+        stamps = self._stamps
+        span = loop_span_ns(stamps)
+        start = time.monotonic_ns() + 1_000_000
+        wall_start = time.time_ns() + (start - time.monotonic_ns())
+        offset = wall_start - int(stamps[0]) if self._stamp_mode is StampMode.SHIFT else 0
+        deadlines = replay_deadlines(stamps, start, self._rate).tolist()
+        pass_duration = round(span / self._rate)
+        stamp_list = stamps.tolist()
+        specs = list(self._values)
+        columns = [self._values[spec] for spec in specs]
+        publishers = [self._outputs[spec] for spec in specs]
+        builders = [self._builders[spec] for spec in specs]
+        stats = self.statistics
+        self.state = "playing"
+        while not self._stop.is_set():
+            shift = self.passes * pass_duration
+            stamp_shift = offset + self.passes * span
+            for index, deadline in enumerate(deadlines):
+                if self._stop.is_set():
+                    break
+                wake = sleep_until(deadline + shift, self._spin_ns)
+                stats.add("period_error", wake - deadline - shift)
+                stamp = stamp_list[index] + stamp_shift
+                for column, publisher, build in zip(columns, publishers, builders):
+                    publisher.publish(build(stamp, column[index]))
+                self.published += 1
+            else:
+                self.passes += 1
+                if self._loop:
+                    continue
+            break
+        if not self._stop.is_set():
+            self.state = "finished"
+            self.get_logger().info(f"replay finished: {self.published} samples published")
+            self._report()
+            if self._exit_at_end:
+                self.exit_requested.set()
+
+    # -- CAN ---------------------------------------------------------------------------
+
+    def _prepare_can(self, publish_measured: bool) -> None:
+        from brake_hil.io.can_daq import CanDaq
+
+        can = self._can
+        options = {"sleep_after_open": float(can["sleep_after_open"])}
+        self._daq = CanDaq(
+            str(can["interface"]),
+            str(can["channel"]),
+            int(can["bitrate"]),
+            dbc_path=str(can["dbc_path"]),
+            stale_after_s=float(can["stale_after_s"]),
+            bus_kwargs=options if can["interface"] == "slcan" else None,
+        )
+        self._daq.open()  # an unknown interface fails here; a missing adapter is retried
+        quantities = self._daq.codec.quantities
+        unknown = [q for q in quantities if q not in QUANTITY_TOPICS]
+        if unknown:
+            raise BrakeHilError(f"{can['dbc_path']}: no topic for the quantities {unknown}")
+        self._quantities = [q for q in quantities if publish_measured or q == "p_i"]
+        self._advertise([QUANTITY_TOPICS[q] for q in self._quantities])
+        self.get_logger().info(
+            f"acquiring {', '.join(self._quantities)} from CAN {can['interface']} "
+            f"{can['channel']} at {can['bitrate']} bit/s"
+        )
+
+    def _acquire(self) -> None:
+        set_timer_slack(1)
+        set_realtime_priority(self._priority)
+        daq = self._daq
+        routes = {
+            q: (self._outputs[QUANTITY_TOPICS[q]], self._builders[QUANTITY_TOPICS[q]])
+            for q in self._quantities
+        }
+        self.state = "acquiring"
+        last_status = None
+        with daq:
+            while not self._stop.is_set():
+                for sample in daq.poll(timeout=0.001):
+                    stamp = sample.stamp_ns
+                    for quantity, value in sample.values.items():
+                        route = routes.get(quantity)
+                        if route is not None:
+                            route[0].publish(route[1](stamp, value))
+                    if "p_i" in sample.values:
+                        self.published += 1
+                status = daq.health().status
+                if status is not last_status:
+                    last_status = status
+                    self._report()
+
+    # -- reporting -----------------------------------------------------------------------
+
+    def _report(self) -> None:
+        if self.context.ok():
+            self._diagnostics.publish(common.diagnostic_array(self, self.statuses()))
+
+    def statuses(self) -> list[Any]:
+        """The node's diagnostics now."""
+        if self.mode == "can":
+            return [self._daq_status()]
+        window = self.statistics.take_window()
+        level = common.OK
+        if self.state.startswith("failed"):
+            level = common.ERROR
+        elif self.state == "waiting for subscribers":
+            level = common.STALE
+        values: list[tuple[str, object]] = [
+            ("state", self.state),
+            ("published", self.published),
+            ("samples", int(self._stamps.size)),
+            ("passes", self.passes),
+            ("rate", self._rate),
+            ("stamp_mode", self._stamp_mode.value),
+            ("recording", str(self.recording.path)),
+            *common.timing_values({"period_error": window["period_error"]}),
+        ]
+        return [common.diagnostic_status(f"{NAME}: replay", level, f"replay {self.state}", values)]
+
+    def _daq_status(self) -> Any:
+        health = self._daq.health()
+        message = f"DAQ {health.status.value}"
+        if health.last_error:
+            message += f": {health.last_error}"
+        if self.state.startswith("failed"):
+            message = self.state
+        values = {
+            **{key: value for key, value in health._asdict().items() if key != "status"},
+            "published": self.published,
+            "interface": self._can["interface"],
+            "channel": self._can["channel"],
+        }
+        level = common.ERROR if self.state.startswith("failed") else health.status.diagnostic_level
+        return common.diagnostic_status(f"{NAME}: daq", level, message, values)
+
+    def close(self) -> None:
+        """Stop publishing, wait for the worker thread, write the statistics file."""
+        self._stop.set()
+        self._thread.join(2.0)
+        if self.context.ok():
+            common.wait_for_acks(self._outputs.values())
+        if self._statistics_file:
+            summary = {
+                "mode": self.mode,
+                "state": self.state,
+                "published": self.published,
+                "passes": self.passes,
+                "period_error": self.statistics.total["period_error"].summary().as_dict(),
+            }
+            if self._daq is not None:
+                health = self._daq.health()._asdict()
+                summary["daq"] = {k: v for k, v in health.items() if k != "status"}
+                summary["daq"]["status"] = health["status"].value
+            path = Path(self._statistics_file)
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+
+
+def main(args: list[str] | None = None) -> int:
+    """Entry point ``pressure_source``: run until SIGINT/SIGTERM."""
+    common.init_ros(args)
+    try:
+        node = PressureSourceNode()
+    except (BrakeHilError, ParameterException) as err:
+        print(f"{NAME}: error: {err}", file=sys.stderr)
+        rclpy.shutdown()
+        return 2
+    try:
+        healthy = common.spin_until_signal(node, node.exit_requested)
+    finally:
+        node.close()
+        node.destroy_node()
+        rclpy.shutdown()
+    return 0 if healthy else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,334 @@
+"""Concealed-effect benchmark: labelled virtual-rig cases for scoring a diagnosis blind.
+
+:func:`generate_cases` writes ``DIR/cases/NNN/recording/`` (a rosbag2 MCAP directory) and
+``DIR/cases/NNN/rig.yaml`` (the *nominal* rig the engineer believes) for each case, and the
+labels apart from them in ``DIR/labels.json``, which a diagnosis run on ``DIR/cases`` never
+reads. A case is:
+
+* ``null``: a parameter error only (truth differs from nominal within the rig tolerances);
+* ``single``: one effect at a ``subtle`` (strength 0.15-0.35) or ``strong`` (0.7-1.0)
+  strength, on top of a parameter error;
+* ``pair``: two different effects, each subtle or strong.
+
+:func:`plan_cases` fixes the schedule so that the first cases already cover every kind: null
+cases, every effect both subtle and strong, and pairs. Every draw comes from
+``numpy.random.default_rng([seed, case number])``, so a case does not depend on how many
+others are generated or in which process.
+
+Parameter errors: each value of ``PERTURBED_KEYS`` is multiplied by ``1 + e``, ``e`` drawn
+from a normal distribution of standard deviation ``error_scale / 2`` times the key's
+tolerance (interface.md: ``caliper.stiffness`` 25 %, ``needle_valve.resistance`` 40 %, seal
+values 30 %, ``fluid.air_fraction`` 100 %, the rest 10 %, one sigma) and clipped to one sigma.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from brake_hil import __version__
+from brake_hil.core.excitation import SEED_MAX_PRESSURES
+from brake_hil.core.rig import Rig, rig_from_mapping
+from brake_hil.virtual_rig.bag import write_run
+from brake_hil.virtual_rig.effects import EFFECTS, Effect, make_effect
+from brake_hil.virtual_rig.effects.sensor_delay import CHANNELS
+from brake_hil.virtual_rig.excitation import Excitation, seed_pulsing, solenoid_pulsing
+from brake_hil.virtual_rig.rig_yaml import rig_to_mapping, rig_with_values, write_rig
+from brake_hil.virtual_rig.simulator import simulate_rig
+
+PERTURBED_KEYS = (
+    "caliper.stiffness",
+    "caliper.mass",
+    "block.stiffness",
+    "needle_valve.resistance",
+    "seal.youngs_modulus",
+    "seal.shear_length",
+    "seal.friction_coefficient",
+    "seal.loss_factor",
+    "bore_friction_coefficient",
+    "fluid.viscosity",
+    "fluid.bulk_modulus",
+    "fluid.air_fraction",
+    "hose.youngs_modulus",
+)
+"""Rig values that differ between nominal and truth (the catalogue-grade ones; geometry is
+taken as measured)."""
+
+SUBTLE_STRENGTHS = (0.15, 0.35)
+STRONG_STRENGTHS = (0.7, 1.0)
+
+_PHYSICS_MD_RIG: dict[str, Any] = {
+    "rig": {
+        "name": "nominal one-washer rig",
+        "washers": 1,
+        "washer_thickness": 1.5e-3,
+        "pistons": {"count": 2, "diameter": 0.040, "mass": 0.2},
+        "bore": {"area_ratio": 1.15, "length": 0.012},
+        "caliper": {"mass": 2.5, "stiffness": 4.0e7, "transducer_distance": 0.10},
+        "block": {"stiffness": 1.5e9},
+        "seal": {
+            "youngs_modulus": 9.2e6,
+            "poisson_ratio": 0.49,
+            "squeeze": 0.15,
+            "width": 3.0e-3,
+            "shear_length": 1.0e-4,
+            "friction_coefficient": 0.30,
+            "loss_factor": 0.10,
+        },
+        "bore_friction_coefficient": 0.20,
+        "fluid": {
+            "density": 1050.0,
+            "viscosity": 0.008,
+            "bulk_modulus": 1.6e9,
+            "air_fraction": 0.001,
+        },
+        "hard_pipe": {"length": 1.5, "diameter": 3.2e-3, "wall": 0.7e-3, "youngs_modulus": 2.0e11},
+        "hose": {"length": 0.6, "diameter": 3.2e-3, "wall": 3.5e-3, "youngs_modulus": 1.0e9},
+        "needle_valve": {"resistance": 3.2e10},
+        "excitation_hz": 5.0,
+    }
+}
+RESTRICTED_VALVE_RESISTANCE = 1.3e11
+"""Linearised resistance of the seed's restricted needle valve (Pa s/m^3, physics.md)."""
+
+
+def nominal_rigs() -> dict[str, Rig]:
+    """physics.md's default parameter set: one and five washers, valve open and restricted."""
+    base = rig_from_mapping(_PHYSICS_MD_RIG, source="physics.md default set")
+    rigs = {}
+    for washers in (1, 5):
+        for valve, resistance in (("open", 3.2e10), ("restricted", RESTRICTED_VALVE_RESISTANCE)):
+            key = f"{'one' if washers == 1 else 'five'}_washer_{valve}"
+            name = f"nominal {'one' if washers == 1 else 'five'}-washer rig, valve {valve}"
+            document = rig_to_mapping(base)
+            document["rig"]["washers"] = washers
+            document["rig"]["needle_valve"]["resistance"] = resistance
+            document["rig"]["name"] = name
+            rigs[key] = rig_from_mapping(document, source=f"physics.md default set, {key}")
+    return rigs
+
+
+@dataclass(frozen=True)
+class CaseSpec:
+    """What one case holds (the label) before it is simulated."""
+
+    number: int
+    kind: str  # null, single or pair
+    strength_class: str  # none (null), subtle, strong, or mixed (a pair of both)
+    effects: tuple[Effect, ...]
+    nominal_key: str  # which of the nominal rigs
+    parameter_errors: dict[str, float] = field(default_factory=dict)  # truth / nominal - 1
+    air_driven: bool = False
+    noise_seed: int = 0
+
+    @property
+    def case_id(self) -> str:
+        """Folder name of the case (``000``, ``001``, ...)."""
+        return f"{self.number:03d}"
+
+
+def _schedule(count: int, seed: int) -> Iterator[tuple[str, tuple[str, ...], tuple[str, ...]]]:
+    """(kind, effect names, strength classes) for each case, covering every kind early.
+
+    Per round of ``2 * E + 2 + 4`` cases (``E`` effects): two null cases, each effect once
+    subtle and once strong (subtle first for half of them), four pairs.
+    """
+    names = list(EFFECTS)
+    rng = np.random.default_rng([seed, 1_000_003])
+    produced = 0
+    while produced < count:
+        order = [names[i] for i in rng.permutation(len(names))]
+        first = [
+            ("single", (name,), ("subtle" if i % 2 else "strong",)) for i, name in enumerate(order)
+        ]
+        second = [
+            ("single", (name,), ("strong" if i % 2 else "subtle",)) for i, name in enumerate(order)
+        ]
+        pairs = []
+        for _ in range(4):
+            a, b = rng.choice(len(names), size=2, replace=False)
+            classes = tuple(str(c) for c in rng.choice(["subtle", "strong"], size=2))
+            pairs.append(("pair", (names[int(a)], names[int(b)]), classes))
+        round_ = [("null", (), ()), *first, pairs[0], pairs[1], ("null", (), ()), *second]
+        round_ += pairs[2:]
+        for item in round_:
+            if produced == count:
+                return
+            produced += 1
+            yield item
+
+
+def _draw_effect(name: str, strength_class: str, rng: np.random.Generator) -> Effect:
+    low, high = SUBTLE_STRENGTHS if strength_class == "subtle" else STRONG_STRENGTHS
+    strength = float(np.round(rng.uniform(low, high), 3))
+    if name == "sensor_delay":
+        return make_effect(name, strength, channel=str(rng.choice(CHANNELS)))
+    return make_effect(name, strength)
+
+
+def draw_parameter_errors(
+    nominal: Rig, rng: np.random.Generator, error_scale: float = 1.0
+) -> dict[str, float]:
+    """Relative errors ``truth / nominal - 1`` per ``PERTURBED_KEYS``, within one sigma."""
+    errors = {}
+    for key in PERTURBED_KEYS:
+        sigma = nominal.tolerance(key) * error_scale
+        errors[key] = float(np.round(np.clip(rng.normal(0.0, 0.5 * sigma), -sigma, sigma), 4))
+    return errors
+
+
+def truth_rig(nominal: Rig, errors: dict[str, float], name: str) -> Rig:
+    """The nominal rig with each dotted value multiplied by ``1 + error``."""
+    document = rig_to_mapping(nominal)["rig"]
+    values = {}
+    for key, error in errors.items():
+        node: Any = document
+        for part in key.split("."):
+            node = node[part]
+        values[key] = float(node) * (1.0 + error)
+    return rig_with_values(nominal, values, name=name)
+
+
+def plan_cases(
+    count: int,
+    seed: int,
+    *,
+    nominal_keys: Sequence[str] = ("one_washer_open", "one_washer_restricted", "five_washer_open"),
+    error_scale: float = 1.0,
+    air_driven_share: float = 0.25,
+) -> list[CaseSpec]:
+    """The labelled cases, before simulation (see the module docstring)."""
+    rigs = nominal_rigs()
+    specs = []
+    for number, (kind, names, classes) in enumerate(_schedule(count, seed)):
+        rng = np.random.default_rng([seed, number])
+        nominal_key = str(rng.choice(list(nominal_keys)))
+        effects = tuple(_draw_effect(n, c, rng) for n, c in zip(names, classes))
+        strength_class = "none" if not classes else classes[0]
+        if len(set(classes)) > 1:
+            strength_class = "mixed"
+        specs.append(
+            CaseSpec(
+                number=number,
+                kind=kind,
+                strength_class=strength_class,
+                effects=effects,
+                nominal_key=nominal_key,
+                parameter_errors=draw_parameter_errors(rigs[nominal_key], rng, error_scale),
+                air_driven=bool(rng.uniform() < air_driven_share),
+                noise_seed=int(rng.integers(0, 2**31 - 1)),
+            )
+        )
+    return specs
+
+
+def case_excitation(spec: CaseSpec, truth: Rig, pulsing_s: float) -> Excitation:
+    """The seed's three segments (1.38, 2.07, 2.76 MPa), solenoid-driven or as ``p_i``."""
+    if spec.air_driven:
+        return solenoid_pulsing(
+            truth, SEED_MAX_PRESSURES, pulsing_s=pulsing_s, pulsing_hz=truth.excitation_hz
+        )
+    return seed_pulsing(SEED_MAX_PRESSURES, pulsing_s=pulsing_s, pulsing_hz=truth.excitation_hz)
+
+
+def label(spec: CaseSpec, truth: Rig, excitation: Excitation) -> dict[str, Any]:
+    """The JSON label of one case."""
+    return {
+        "kind": spec.kind,
+        "strength_class": spec.strength_class,
+        "expected_effects": sorted(effect.name for effect in spec.effects),
+        "effects": [{"name": e.name, "parameters": e.values()} for e in spec.effects],
+        "nominal_rig": spec.nominal_key,
+        "parameter_errors": spec.parameter_errors,
+        "truth_rig": rig_to_mapping(truth),
+        "excitation": excitation.label,
+        "air_driven": spec.air_driven,
+        "noise_seed": spec.noise_seed,
+    }
+
+
+def make_case(spec: CaseSpec, cases_dir: Path, pulsing_s: float) -> dict[str, Any]:
+    """Simulate and write one case; return its label."""
+    nominal = nominal_rigs()[spec.nominal_key]
+    truth = truth_rig(nominal, spec.parameter_errors, f"truth of case {spec.case_id}")
+    excitation = case_excitation(spec, truth, pulsing_s)
+    run = simulate_rig(truth, spec.effects, excitation, seed=spec.noise_seed)
+    folder = cases_dir / spec.case_id
+    folder.mkdir(parents=True, exist_ok=False)
+    write_run(run, folder / "recording")
+    write_rig(nominal, folder / "rig.yaml", "The rig as the test engineer describes it.")
+    result = label(spec, truth, excitation)
+    result["simulation_seconds"] = round(run.solver.seconds, 3)
+    return result
+
+
+def _make_case_job(job: tuple[CaseSpec, Path, float]) -> tuple[str, dict[str, Any]]:
+    spec, cases_dir, pulsing_s = job
+    return spec.case_id, make_case(spec, cases_dir, pulsing_s)
+
+
+def generate_cases(
+    out: Path | str,
+    count: int,
+    seed: int = 0,
+    *,
+    pulsing_s: float = 5.0,
+    jobs: int = 1,
+    error_scale: float = 1.0,
+    progress: Callable[[str], None] | None = None,
+) -> Path:
+    """Write ``count`` labelled cases under ``out``; return the path of ``labels.json``.
+
+    Args:
+        out: a new or empty directory; gets ``cases/NNN/{recording/,rig.yaml}`` and
+            ``labels.json``.
+        count: number of cases.
+        seed: seed of every draw (cases, strengths, parameter errors, sensor noise).
+        pulsing_s: seconds of 5 Hz pulsing per maximum pressure (5 s: 18 s recordings).
+        jobs: worker processes (the machine's cores, at most).
+        error_scale: multiplies the one-sigma tolerances the parameter errors are drawn from.
+        progress: called with each finished case's id.
+
+    Raises:
+        FileExistsError: ``out`` holds files already.
+    """
+    out = Path(out)
+    if out.exists() and any(out.iterdir()):
+        raise FileExistsError(f"{out}: not empty; choose a new directory for the cases")
+    cases_dir = out / "cases"
+    cases_dir.mkdir(parents=True, exist_ok=True)
+    specs = plan_cases(count, seed, error_scale=error_scale)
+    labels: dict[str, Any] = {}
+    work = [(spec, cases_dir, pulsing_s) for spec in specs]
+    if jobs > 1:
+        with ProcessPoolExecutor(max_workers=jobs) as pool:
+            for case_id, result in pool.map(_make_case_job, work):
+                labels[case_id] = result
+                if progress is not None:
+                    progress(case_id)
+    else:
+        for job in work:
+            case_id, result = _make_case_job(job)
+            labels[case_id] = result
+            if progress is not None:
+                progress(case_id)
+    document = {
+        "generator": {
+            "tool": f"brake_hil {__version__} virtual rig",
+            "count": count,
+            "seed": seed,
+            "pulsing_s": pulsing_s,
+            "error_scale": error_scale,
+            "layout": "cases/NNN/recording (rosbag2 MCAP) + cases/NNN/rig.yaml (nominal)",
+        },
+        "cases": dict(sorted(labels.items())),
+    }
+    path = out / "labels.json"
+    path.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
+    return path

@@ -1,0 +1,120 @@
+"""hose_compliance: the hose and pipe between master cylinder and bore store fluid."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, EffectError, Parameter, Signal
+
+if TYPE_CHECKING:
+    from brake_hil.virtual_rig.plant import Plant
+
+
+@dataclass(frozen=True)
+class HoseLadder:
+    """The line as an RC ladder: pipe and valve, then ``N`` hose segments, bound to a rig.
+
+    Node ``j`` (``0 .. N-1``) sits before hose segment ``j + 1`` (resistance ``R_t / N``);
+    node 0 is the valve outlet and carries the hard pipe's compliance. The bore end of the
+    last segment carries ``bore_end_*``. Compliances are
+    ``share * (volume * fluid compliance + wall compliance)``.
+    """
+
+    share: float  # s, -
+    node_volumes: tuple[float, ...]  # m^3, fluid volume lumped at each node
+    node_wall_compliances: tuple[float, ...]  # m^3/Pa, wall expansion lumped at each node
+    bore_end_volume: float  # m^3
+    bore_end_wall_compliance: float  # m^3/Pa
+
+    @property
+    def segment_count(self) -> int:
+        """Number of hose segments ``N``."""
+        return len(self.node_volumes)
+
+    def node_compliance(self, node: int, fluid_compliance: Signal) -> Signal:
+        """Compliance (m^3/Pa) of node ``node`` for a fluid compliance per volume (1/Pa)."""
+        compliance: Signal = self.share * (
+            self.node_volumes[node] * fluid_compliance + self.node_wall_compliances[node]
+        )
+        return compliance
+
+    def bore_end_compliance(self, fluid_compliance: Signal) -> Signal:
+        """Compliance (m^3/Pa) the hose adds to the bore chamber."""
+        compliance: Signal = self.share * (
+            self.bore_end_volume * fluid_compliance + self.bore_end_wall_compliance
+        )
+        return compliance
+
+
+@dataclass(frozen=True)
+class HoseCompliance(Effect):
+    """Hose and pipe compliance: the seed's flow equation (21c) moves fluid from the master
+    cylinder to the bore through a rigid line, but the braided hose swells with pressure and
+    the fluid in the line is compressible, so part of the flow is stored on the way and the
+    bore pressure lags and is filtered more. The simulator splits the line into a transmission
+    line of lumped segments: the hard pipe and needle valve (``R_r + R_v``, carrying the
+    line's inertance ``I_r + I_t``) feed a node holding the pipe's compliance, then ``N`` hose
+    segments of resistance ``R_t / N`` alternate with nodes of compliance
+    ``V_t / (N beta) + l_t e_h / N`` (half of it at each end), ``e_h`` the hose's volumetric
+    expansion per length and pressure (SAE J1401 rates brake hose by it).
+    Source: seed eqs. 12-14, 18, 21c; Stecki and Davis, "Fluid transmission lines -
+    distributed parameter models", Proc. IMechE A 200(4), 1986; SAE J1401.
+    """
+
+    strength: float = 1.0
+    hose_expansion: float = 2.0e-13
+    segments: int = 4
+
+    name = "hose_compliance"
+    parameters = (
+        STRENGTH,
+        Parameter("hose_expansion", "m^3/(Pa m)", 1.0e-14, 1.0e-12, "e_h, hose swell"),
+        Parameter("segments", "-", 1, 16, "N, lumped hose segments"),
+    )
+    signature = (
+        "p_b lags p_i more and its peak-to-peak is lower than predicted, more at higher "
+        "frequency (sweep); F_k and x_c follow p_b; the mismatch hardly depends on pressure"
+    )
+    diagnosis_model = (
+        "one lumped RC stage (a single extra compliance between the valve and the bore); "
+        "the simulator's line is a ladder of several R-I-C segments"
+    )
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if int(self.segments) != self.segments:
+            raise EffectError(f"effect {self.name}: segments = {self.segments!r} is not whole")
+
+    def law(self, plant: Plant) -> HoseLadder:
+        """The ladder of the plant's truth line at this strength."""
+        rig = plant.rig
+        count = int(self.segments)
+        pipe_volume = math.pi * rig.hard_pipe.diameter**2 / 4.0 * rig.hard_pipe.length
+        pipe_wall = (
+            pipe_volume
+            * rig.hard_pipe.diameter
+            / (rig.hard_pipe.wall * rig.hard_pipe.youngs_modulus)
+        )
+        hose_volume = math.pi * rig.hose.diameter**2 / 4.0 * rig.hose.length
+        hose_wall = rig.hose.length * self.hose_expansion
+        volumes = np.full(count, hose_volume / count)
+        walls = np.full(count, hose_wall / count)
+        volumes[0] = pipe_volume + 0.5 * hose_volume / count
+        walls[0] = pipe_wall + 0.5 * hose_wall / count
+        return HoseLadder(
+            share=self.strength,
+            node_volumes=tuple(float(v) for v in volumes),
+            node_wall_compliances=tuple(float(w) for w in walls),
+            bore_end_volume=0.5 * hose_volume / count,
+            bore_end_wall_compliance=0.5 * hose_wall / count,
+        )
+
+    def install(self, plant: Plant) -> Plant:
+        """Line slot: the ladder replaces the lumped line."""
+        if not self.active:
+            return plant
+        return replace(plant, line=self.law(plant))

@@ -1,0 +1,156 @@
+"""seal_stick_slip: the piston seals stick and slip instead of acting as ``k_eh``, ``c_eh``."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+import math
+from typing import TYPE_CHECKING
+
+from brake_hil.core.parameters import seal_properties
+from brake_hil.virtual_rig.effects import _math as fm
+from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter, Signal
+
+if TYPE_CHECKING:
+    from brake_hil.virtual_rig.plant import Plant
+
+SPEED_SMOOTHING = 2.0e-5
+"""Velocity (m/s) below which ``|v|`` is rounded off, ``sqrt(v^2 + e^2) - e``."""
+ASYMMETRY_WIDTH_SHARE = 0.25
+"""Width of the apply/release switch of an asymmetric seal, as a share of ``F_S / sigma_0``."""
+
+
+def smooth_speed(velocity: Signal) -> Signal:
+    """``|v|`` rounded off below :data:`SPEED_SMOOTHING` (m/s), so the law is differentiable."""
+    return fm.sqrt(velocity**2 + SPEED_SMOOTHING**2) - SPEED_SMOOTHING
+
+
+@dataclass(frozen=True)
+class LuGreSeal:
+    """LuGre friction law of both seals together, bound to a rig (SI)."""
+
+    bristle_stiffness: float  # sigma_0 = 2 k_s, N/m
+    static_force: float  # F_S = 2 F_fs, N
+    coulomb_force: float  # F_C, N
+    stribeck_velocity: float  # v_S, m/s
+    microdamping: float  # sigma_1, N s/m
+    viscous_friction: float  # sigma_2, N s/m
+
+    def slip_force(
+        self, velocity: Signal, deflection: Signal, asymmetry: float, modulus_factor: Signal
+    ) -> Signal:
+        """Stribeck curve ``g(v)`` (N), times ``(1 - a)`` on the apply side of the seal's
+        deflection (``z > 0``) and ``(1 + a)`` on the release side, switched smoothly."""
+        decay = fm.exp(-((velocity / self.stribeck_velocity) ** 2))
+        slip = (self.coulomb_force + (self.static_force - self.coulomb_force) * decay) * (
+            modulus_factor
+        )
+        if asymmetry:
+            width = ASYMMETRY_WIDTH_SHARE * self.static_force / self.bristle_stiffness
+            slip = slip * (1.0 - asymmetry * fm.tanh(deflection / width))
+        return slip
+
+    def deflection_rate(
+        self, deflection: Signal, velocity: Signal, slip_force: Signal, modulus_factor: Signal
+    ) -> Signal:
+        """``z' = v - sigma_0 |v| z / g`` (m/s): the seal shears, then slides."""
+        stiffness = self.bristle_stiffness * modulus_factor
+        return velocity - stiffness * smooth_speed(velocity) * deflection / slip_force
+
+    def force(
+        self,
+        deflection: Signal,
+        deflection_rate: Signal,
+        velocity: Signal,
+        modulus_factor: Signal,
+        viscosity_factor: Signal,
+    ) -> Signal:
+        """Seal force on the piston ``sigma_0 z + sigma_1 z' + sigma_2 v`` (N)."""
+        return (
+            self.bristle_stiffness * modulus_factor * deflection
+            + self.microdamping * deflection_rate
+            + self.viscous_friction * viscosity_factor * velocity
+        )
+
+
+@dataclass(frozen=True)
+class SealStickSlip(Effect):
+    """Coulomb friction at the piston-seal interface in place of the equivalent viscous
+    ``k_eh``, ``c_eh``. Each rectangular seal is a shear beam of stiffness
+    ``k_s = G_s pi d_p w_s / l_s`` (seed eq. 3) whose inner face sticks to the piston until the
+    shear force reaches ``F_fs = mu_fs E_s eps_s pi d_p w_s`` (seed eq. 2), then slides; the
+    seed's Table 3 (``k_eh`` falling with amplitude) and Table 1 (super-harmonics growing
+    toward ``x_c``) are its signatures. The simulator writes it as a LuGre law (Canudas de Wit,
+    Olsson, Astrom, Lischinsky, IEEE Trans. Automatic Control 40(3), 1995) whose bristle is
+    the seals' own shear deflection ``z``: ``z' = v - sigma_0 |v| z / g(v)``,
+    ``F = sigma_0 z + sigma_1 z' + sigma_2 v`` with ``sigma_0 = 2 k_s``, the Stribeck curve
+    ``g(v) = F_C + (F_S - F_C) exp(-(v / v_S)^2)``, ``F_S = 2 F_fs`` (Armstrong-Helouvry,
+    Dupont, Canudas de Wit, Automatica 30(7), 1994), a viscous film ``sigma_2`` and the seal's
+    internal damping as LuGre's micro-damping ``sigma_1 = 2 zeta_1 sqrt(sigma_0 M_p)`` (not
+    eq. 6's 5 Hz equivalent ``eta_s sigma_0 / w_e``, which with a Stribeck drop would make the
+    law feed the piston's and caliper's kHz modes). Because ``c_eh`` also lumped the
+    structure's own damping, the caliper and the load cells keep a structural damping ratio
+    ``zeta`` (``2 zeta sqrt(k M)`` on ``k_c`` and ``k_k``). Source: seed eqs. 2-6; LuGre (1995).
+
+    ``strength`` is the share of the seal force carried by this law (and of the structural
+    damping added); the rest stays the LTI spring and damper. At 1 the seals are purely
+    frictional.
+    """
+
+    strength: float = 1.0
+    coulomb_ratio: float = 0.8
+    stribeck_velocity: float = 1.0e-3
+    microdamping_ratio: float = 0.5
+    viscous_friction: float = 500.0
+    structural_damping_ratio: float = 0.1
+
+    name = "seal_stick_slip"
+    parameters = (
+        STRENGTH,
+        Parameter("coulomb_ratio", "-", 0.3, 1.0, "kinetic over static threshold F_C / F_S"),
+        Parameter("stribeck_velocity", "m/s", 1.0e-5, 0.1, "v_S of the Stribeck curve"),
+        Parameter("microdamping_ratio", "-", 0.0, 2.0, "zeta_1 of sigma_1"),
+        Parameter("viscous_friction", "N s/m", 0.0, 1.0e4, "sigma_2, lubricant film, both seals"),
+        Parameter("structural_damping_ratio", "-", 0.0, 0.3, "zeta of caliper and load cells"),
+    )
+    signature = (
+        "k_eh from characterize falls as the pressure amplitude grows (the seal slips more); "
+        "x_c's 2nd-3rd harmonic share grows from p_i to x_c; the seal loop (A_ep p_b - F_k "
+        "over F_k/k_k - x_c) has flat slipping edges; at low amplitude the rig is stiffer "
+        "(x_c smaller) than the seed's k_eh* = 0.29"
+    )
+    diagnosis_model = (
+        "an ideal Jenkins element per seal: spring k_s in series with a rate-independent "
+        "Coulomb slider F_fs; the simulator's law is smooth, rate dependent (Stribeck drop to "
+        "F_C, viscous sigma_2, microdamping sigma_1) and creeps below the threshold"
+    )
+
+    def law(self, plant: Plant) -> LuGreSeal:
+        """The LuGre law of the plant's truth seals (both together)."""
+        seal = seal_properties(plant.rig)
+        stiffness = 2.0 * seal.static_stiffness
+        static = 2.0 * seal.friction_threshold
+        return LuGreSeal(
+            bristle_stiffness=stiffness,
+            static_force=static,
+            coulomb_force=self.coulomb_ratio * static,
+            stribeck_velocity=self.stribeck_velocity,
+            microdamping=2.0
+            * self.microdamping_ratio
+            * math.sqrt(stiffness * plant.params.piston_mass),
+            viscous_friction=self.viscous_friction,
+        )
+
+    def install(self, plant: Plant) -> Plant:
+        """Seal slot: the LuGre law carries ``strength`` of the seal force."""
+        if not self.active:
+            return plant
+        params = plant.params
+        ratio = 2.0 * self.strength * self.structural_damping_ratio
+        seal = replace(
+            plant.seal,
+            friction=self.law(plant),
+            friction_share=self.strength,
+            caliper_damping=ratio * math.sqrt(params.caliper_stiffness * params.caliper_mass),
+            block_damping=ratio * math.sqrt(params.block_stiffness * params.piston_mass),
+        )
+        return replace(plant, seal=seal)

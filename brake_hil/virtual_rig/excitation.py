@@ -1,0 +1,203 @@
+"""Inputs of the virtual rig: the seed's ramp-then-pulse, a ramp, a 5-25 Hz sweep, the solenoid.
+
+An :class:`Excitation` is a sampled pressure (Pa, gauge) at the 1 kHz stamps, either the
+master-cylinder pressure ``p_i`` (eqs. 21c-f) or the air pressure ``p_a`` behind the master
+cylinder (eqs. 21a-f). Between samples the simulator reads it linearly (a first-order hold,
+as the LTI model's discretisation does).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+import math
+
+import numpy as np
+from scipy.signal import lfilter
+
+from brake_hil.core.excitation import SEED_MAX_PRESSURES, pulsing_profile
+from brake_hil.core.lti_model import ModelInput
+from brake_hil.core.rig import Rig
+from brake_hil.core.types import FloatArray
+from brake_hil.virtual_rig.effects.base import EffectError
+
+SAMPLE_RATE_HZ = 1000.0
+"""Sample rate of the rig's acquisition (Hz)."""
+
+__all__ = [
+    "SAMPLE_RATE_HZ",
+    "SEED_MAX_PRESSURES",
+    "Excitation",
+    "frequency_sweep",
+    "pressure_ramp",
+    "seed_pulsing",
+    "solenoid_pulsing",
+]
+
+
+@dataclass(frozen=True, eq=False)
+class Excitation:
+    """A sampled input pressure: ``p_i`` or ``p_a`` (Pa) at ``time`` (s, uniform, from 0)."""
+
+    time: FloatArray  # s
+    pressure: FloatArray  # Pa (gauge)
+    kind: ModelInput  # which pressure this is
+    label: str  # what it is, for recordings and labels
+
+    def __post_init__(self) -> None:
+        time = np.asarray(self.time, dtype=float)
+        pressure = np.asarray(self.pressure, dtype=float)
+        if time.ndim != 1 or time.size < 2 or pressure.shape != time.shape:
+            raise EffectError(
+                f"excitation {self.label!r}: time {time.shape} and pressure {pressure.shape} "
+                "must be 1-D of one length (at least 2 samples)"
+            )
+        if not (np.all(np.isfinite(time)) and np.all(np.isfinite(pressure))):
+            raise EffectError(f"excitation {self.label!r}: non-finite samples")
+        if np.any(np.diff(time) <= 0.0):
+            raise EffectError(f"excitation {self.label!r}: time must increase")
+
+    @property
+    def duration(self) -> float:
+        """Length of the excitation (s)."""
+        return float(self.time[-1] - self.time[0])
+
+    @property
+    def air_driven(self) -> bool:
+        """True when the input is the air pressure ``p_a`` (eqs. 21a-b)."""
+        return self.kind is ModelInput.AIR_PRESSURE
+
+
+def seed_pulsing(
+    max_pressures: Sequence[float] = (1.38e6,),
+    *,
+    ramp_s: float = 1.0,
+    pulsing_s: float = 5.0,
+    pulsing_hz: float = 5.0,
+    amplitude_fraction: float = 0.22,
+) -> Excitation:
+    """The seed's master-cylinder pressure: per maximum pressure (Pa), a ramp then pulsing.
+
+    See :func:`brake_hil.core.excitation.pulsing_profile`; ``SEED_MAX_PRESSURES`` gives the
+    seed's three segments (1.38, 2.07, 2.76 MPa).
+    """
+    time, pressure = pulsing_profile(
+        max_pressures,
+        sample_rate_hz=SAMPLE_RATE_HZ,
+        ramp_s=ramp_s,
+        pulsing_s=pulsing_s,
+        pulsing_hz=pulsing_hz,
+        amplitude_fraction=amplitude_fraction,
+    )
+    levels = ", ".join(f"{p / 1e6:.2f}" for p in max_pressures)
+    label = f"seed pulsing {pulsing_hz:g} Hz, p_i max {levels} MPa, {pulsing_s:g} s each"
+    return Excitation(time, pressure, ModelInput.MASTER_CYLINDER_PRESSURE, label)
+
+
+def pressure_ramp(
+    max_pressure: float = 2.76e6,
+    *,
+    rest_s: float = 0.5,
+    rise_s: float = 3.0,
+    hold_s: float = 1.0,
+    fall_s: float = 3.0,
+) -> Excitation:
+    """A non-harmonic input: rest, linear rise to ``max_pressure`` (Pa), hold, fall, rest."""
+    corners_t = np.cumsum([0.0, rest_s, rise_s, hold_s, fall_s, rest_s])
+    corners_p = [0.0, 0.0, max_pressure, max_pressure, 0.0, 0.0]
+    time = np.arange(int(round(corners_t[-1] * SAMPLE_RATE_HZ)) + 1) / SAMPLE_RATE_HZ
+    pressure = np.interp(time, corners_t, corners_p)
+    label = f"ramp to {max_pressure / 1e6:.2f} MPa in {rise_s:g} s, hold {hold_s:g} s, fall"
+    return Excitation(time, pressure, ModelInput.MASTER_CYLINDER_PRESSURE, label)
+
+
+def frequency_sweep(
+    mean_pressure: float = 1.08e6,
+    amplitude: float = 0.3e6,
+    *,
+    start_hz: float = 5.0,
+    end_hz: float = 25.0,
+    ramp_s: float = 1.0,
+    sweep_s: float = 10.0,
+) -> Excitation:
+    """A smooth ramp to ``mean_pressure`` (Pa), then a linear sine sweep (brake-judder band).
+
+    The frequency rises linearly from ``start_hz`` to ``end_hz`` over ``sweep_s``; the
+    amplitude (Pa) fades in over the first period.
+    """
+    ramp = np.arange(int(round(ramp_s * SAMPLE_RATE_HZ))) / SAMPLE_RATE_HZ
+    sweep = np.arange(int(round(sweep_s * SAMPLE_RATE_HZ)) + 1) / SAMPLE_RATE_HZ
+    rate = (end_hz - start_hz) / sweep_s
+    phase = 2.0 * math.pi * (start_hz * sweep + 0.5 * rate * sweep**2)
+    fade = np.minimum(sweep * start_hz, 1.0)
+    pressure = np.concatenate(
+        [
+            mean_pressure * (0.5 - 0.5 * np.cos(math.pi * ramp / ramp_s)),
+            mean_pressure + amplitude * fade * np.sin(phase),
+        ]
+    )
+    time = np.arange(pressure.size) / SAMPLE_RATE_HZ
+    label = (
+        f"sweep {start_hz:g}-{end_hz:g} Hz over {sweep_s:g} s, p_i {mean_pressure / 1e6:.2f} "
+        f"+- {amplitude / 1e6:.2f} MPa"
+    )
+    return Excitation(time, pressure, ModelInput.MASTER_CYLINDER_PRESSURE, label)
+
+
+def solenoid_pulsing(
+    rig: Rig,
+    max_pressures: Sequence[float] = (1.38e6,),
+    *,
+    ramp_s: float = 1.0,
+    pulsing_s: float = 5.0,
+    pulsing_hz: float = 5.0,
+    amplitude_fraction: float = 0.22,
+    valve_time_constant: float = 0.008,
+    pneumatic_time_constant: float = 0.04,
+) -> Excitation:
+    """The seed's actuation: a regulator ramps the air, a 3-way solenoid pulses it (``p_a``).
+
+    ``max_pressures`` are the intended maximum master-cylinder pressures (Pa); the air
+    pressure is scaled by ``A_i / A_a`` (the master cylinder's static gain, eq. 21a). The
+    solenoid switches the air cylinder between supply and a vented level as a square wave at
+    ``pulsing_hz``; the valve opens with a first-order lag ``valve_time_constant`` (s) and the
+    air cylinder fills and vents with a first-order lag ``pneumatic_time_constant`` (s), which
+    round the square into the near-sine the seed measured. The command swing is chosen so
+    that the air pressure swings ``+- amplitude_fraction`` of its maximum in steady pulsing.
+    """
+    master = rig.master_cylinder
+    gain = (master.diameter / master.air_piston_diameter) ** 2  # A_i / A_a
+    oversample = 10
+    fine_rate = SAMPLE_RATE_HZ * oversample
+
+    def pneumatics(command: FloatArray) -> FloatArray:
+        response = command
+        for time_constant in (valve_time_constant, pneumatic_time_constant):
+            decay = math.exp(-1.0 / (fine_rate * time_constant))
+            response = lfilter([1.0 - decay], [1.0, -decay], response)
+        return np.asarray(response, dtype=float)
+
+    def square(duration: float) -> FloatArray:
+        phase = (
+            2.0 * math.pi * pulsing_hz * np.arange(int(round(duration * fine_rate))) / fine_rate
+        )
+        return np.where(np.sin(phase + 1e-9) >= 0.0, 1.0, -1.0)
+
+    settled = pneumatics(square(20.0 / pulsing_hz))  # a unit square wave, 20 periods
+    swing_gain = 0.5 * float(np.ptp(settled[-int(round(fine_rate / pulsing_hz)) :]))
+    pieces: list[FloatArray] = []
+    level = 0.0
+    ramp = np.arange(int(round(ramp_s * fine_rate))) / fine_rate
+    for max_pressure in max_pressures:
+        air_max = max_pressure * gain
+        swing = amplitude_fraction * air_max
+        mean = air_max - swing
+        pieces.append(level + (mean - level) * (0.5 - 0.5 * np.cos(math.pi * ramp / ramp_s)))
+        pieces.append(np.maximum(mean + swing / swing_gain * square(pulsing_s), 0.0))
+        level = mean
+    air = pneumatics(np.concatenate(pieces))
+    air = np.concatenate([[0.0], air])[: air.size : oversample]
+    time = np.arange(air.size) / SAMPLE_RATE_HZ
+    levels = ", ".join(f"{p / 1e6:.2f}" for p in max_pressures)
+    label = f"solenoid pulsing {pulsing_hz:g} Hz, p_i max ~{levels} MPa, {pulsing_s:g} s each"
+    return Excitation(time, air, ModelInput.AIR_PRESSURE, label)

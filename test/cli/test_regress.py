@@ -1,0 +1,79 @@
+"""``brake-hil regress``: tables, exit 1 when a metric moved, 2 on bad input."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+import shutil
+import subprocess
+import sys
+
+from test.conftest import CONFIG, PROJECT
+
+BAG = PROJECT / "bags" / "one_washer_lti"
+
+
+def regress(*args: str | Path) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "brake_hil.cli", "regress", *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+
+
+def test_the_shipped_baseline_passes() -> None:
+    result = regress(BAG, "--baseline", PROJECT / "bags" / "baseline.json")
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert "every metric within its tolerance" in result.stdout
+    rows = [line for line in result.stdout.splitlines() if line.startswith("one_washer_lti ")]
+    assert len(rows) == 9 and all(row.endswith("ok") for row in rows)
+
+
+def test_update_writes_a_baseline_and_a_moved_metric_exits_1(tmp_path: Path) -> None:
+    bags = tmp_path / "bags"
+    for name in ("a", "b"):  # two bags: replayed in parallel
+        shutil.copytree(BAG, bags / name)
+    baseline = bags / "baseline.json"
+    created = regress(
+        bags / "a",
+        bags / "b",
+        "--baseline",
+        baseline,
+        "--model",
+        CONFIG / "rig_default.yaml",
+        "--update",
+    )
+    assert created.returncode == 0, created.stderr
+    document = json.loads(baseline.read_text())
+    assert sorted(document["bags"]) == ["a", "b"]
+    assert regress(bags / "a", bags / "b", "--baseline", baseline).returncode == 0
+    document["bags"]["b"]["metrics"]["p_b"]["ptp_ratio_pct"] -= 3.0
+    baseline.write_text(json.dumps(document))
+    moved = regress(bags / "a", bags / "b", "--baseline", baseline)
+    assert moved.returncode == 1
+    assert [line for line in moved.stdout.splitlines() if line.endswith("MOVED")] == [
+        line
+        for line in moved.stdout.splitlines()
+        if line.startswith("b ") and "ptp_ratio" in line and "p_b" in line
+    ]
+    new = regress(
+        bags / "a", "--baseline", tmp_path / "other.json", "--model", CONFIG / "rig_default.yaml"
+    )
+    assert new.returncode == 2 and "no such baseline" in new.stderr
+
+
+def test_bad_input_exits_2_with_one_line_naming_the_file(tmp_path: Path) -> None:
+    baseline = PROJECT / "bags" / "baseline.json"
+    missing = regress(tmp_path / "nope", "--baseline", baseline)
+    assert missing.returncode == 2
+    assert missing.stderr.count("\n") == 1 and str(tmp_path / "nope") in missing.stderr
+    corrupt = tmp_path / "corrupt.mcap"
+    corrupt.write_bytes(b"\x89MCAP0\r\n" + b"\0" * 40)
+    result = regress(corrupt, "--baseline", baseline)
+    assert result.returncode == 2 and str(corrupt) in result.stderr
+    assert "Traceback" not in result.stderr
+    bad_baseline = tmp_path / "baseline.json"
+    bad_baseline.write_text("[]")
+    result = regress(BAG, "--baseline", bad_baseline, "--model", CONFIG / "rig_default.yaml")
+    assert result.returncode == 2 and str(bad_baseline) in result.stderr

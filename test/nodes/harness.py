@@ -1,0 +1,108 @@
+"""Helpers of the node tests: a ROS environment per run and a collecting rclpy node.
+
+Every node runs as its own process (``python -m brake_hil.nodes.<name>``) with
+``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` and a ``ROS_DOMAIN_ID`` unique to the test run,
+set both in the subprocesses' environment and in this process (for the collector node).
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+import os
+import threading
+import time
+from typing import Any
+
+from diagnostic_msgs.msg import DiagnosticArray
+import rclpy
+from rclpy.context import Context
+from rclpy.node import Node
+
+from brake_hil.nodes import common
+from brake_hil.nodes.chain import ros_environment
+from brake_hil.topics import TopicSpec
+
+
+def unique_domain_id() -> int:
+    """A ROS domain id (1-100) for this test run."""
+    return 1 + (os.getpid() * 31 + time.time_ns() // 1_000_000_000) % 100
+
+
+@contextmanager
+def ros_domain(domain_id: int) -> Iterator[dict[str, str]]:
+    """Point this process at ``domain_id`` on loopback; yield the node processes' env."""
+    saved = {k: os.environ.get(k) for k in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE")}
+    os.environ["ROS_DOMAIN_ID"] = str(domain_id)
+    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    try:
+        yield ros_environment(domain_id)
+    finally:
+        for key, value in saved.items():
+            if value is None:
+                os.environ.pop(key, None)
+            else:
+                os.environ[key] = value
+
+
+class Collector:
+    """A real rclpy node in the test process that keeps what it receives.
+
+    Sample topics are kept as ``(stamp_ns, value, receive_ns)`` from their CDR bytes;
+    ``DiagnosticArray`` topics as ``(receive_ns, message)``.
+    """
+
+    def __init__(self, samples: Sequence[TopicSpec], arrays: Sequence[str] = ()) -> None:
+        self._context = Context()
+        rclpy.init(context=self._context)
+        self.node = Node("test_collector", context=self._context)
+        self.samples: dict[str, list[tuple[int, float, int]]] = defaultdict(list)
+        self.arrays: dict[str, list[tuple[int, Any]]] = defaultdict(list)
+        for spec in samples:
+            read = common.raw_reader(spec)
+            store = self.samples[spec.name]
+
+            def on_sample(data: bytes, read: Any = read, store: Any = store) -> None:
+                store.append((*read(data), time.time_ns()))
+
+            self.node.create_subscription(
+                common.message_class(spec), spec.name, on_sample, common.SAMPLE_QOS, raw=True
+            )
+        for topic in arrays:
+            store_array = self.arrays[topic]
+
+            def on_array(message: Any, store: Any = store_array) -> None:
+                store.append((time.time_ns(), message))
+
+            self.node.create_subscription(DiagnosticArray, topic, on_array, common.DIAGNOSTICS_QOS)
+        self._stop = threading.Event()
+        self._executor = common.make_executor(self._context)
+        self._executor.add_node(self.node)
+        self._thread = threading.Thread(target=self._spin, daemon=True)
+        self._thread.start()
+
+    def _spin(self) -> None:
+        while not self._stop.is_set():
+            self._executor.spin_once(timeout_sec=0.05)
+
+    def publishers(self, topic: str) -> int:
+        """Publishers of ``topic`` seen on the graph."""
+        return int(self.node.count_publishers(topic))
+
+    def wait_for_publishers(self, topics: Sequence[str], timeout_s: float = 30.0) -> bool:
+        """True once every topic has a publisher."""
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            if all(self.publishers(t) for t in topics):
+                return True
+            time.sleep(0.05)
+        return False
+
+    def close(self) -> None:
+        """Stop spinning and shut this node's context down."""
+        self._stop.set()
+        self._thread.join(2.0)
+        self._executor.shutdown()
+        self.node.destroy_node()
+        rclpy.shutdown(context=self._context)

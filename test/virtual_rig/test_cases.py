@@ -1,0 +1,89 @@
+"""The concealed-effect benchmark: labelled cases, labels kept apart from the recordings."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from brake_hil.core.rig import load_rig
+from brake_hil.io.recording_reader import read_recording
+from brake_hil.virtual_rig import EFFECTS
+from brake_hil.virtual_rig.cases import (
+    PERTURBED_KEYS,
+    STRONG_STRENGTHS,
+    SUBTLE_STRENGTHS,
+    generate_cases,
+    nominal_rigs,
+    plan_cases,
+    truth_rig,
+)
+from brake_hil.virtual_rig.rig_yaml import rig_to_mapping
+
+
+def test_the_first_round_covers_null_cases_every_effect_both_strengths_and_pairs() -> None:
+    specs = plan_cases(24, seed=3)
+    singles = {(s.effects[0].name, s.strength_class) for s in specs if s.kind == "single"}
+    assert singles == {(name, c) for name in EFFECTS for c in ("subtle", "strong")}
+    assert sum(s.kind == "null" and not s.effects for s in specs) == 2
+    pairs = [s for s in specs if s.kind == "pair"]
+    assert len(pairs) == 4
+    assert all(len({e.name for e in s.effects}) == 2 for s in pairs)
+
+
+def test_strengths_fall_in_their_class() -> None:
+    for spec in plan_cases(48, seed=5):
+        for effect in spec.effects:
+            low, high = SUBTLE_STRENGTHS if effect.strength < 0.5 else STRONG_STRENGTHS
+            assert low <= effect.strength <= high
+        if spec.kind == "single":
+            expected = SUBTLE_STRENGTHS if spec.strength_class == "subtle" else STRONG_STRENGTHS
+            assert expected[0] <= spec.effects[0].strength <= expected[1]
+
+
+def test_parameter_errors_stay_within_one_sigma_of_the_rig_tolerances() -> None:
+    rigs = nominal_rigs()
+    largest = dict.fromkeys(PERTURBED_KEYS, 0.0)
+    for spec in plan_cases(60, seed=11):
+        nominal = rigs[spec.nominal_key]
+        assert set(spec.parameter_errors) == set(PERTURBED_KEYS)
+        for key, error in spec.parameter_errors.items():
+            assert abs(error) <= nominal.tolerance(key) + 1e-12, key
+            largest[key] = max(largest[key], abs(error) / nominal.tolerance(key))
+        truth = truth_rig(nominal, spec.parameter_errors, "truth")
+        ratio = truth.caliper_stiffness / nominal.caliper_stiffness - 1.0
+        assert ratio == pytest.approx(spec.parameter_errors["caliper.stiffness"], abs=1e-12)
+        assert truth.piston_diameter == nominal.piston_diameter
+    assert min(largest.values()) > 0.5  # the draws use the tolerance, not a sliver of it
+
+
+def test_a_case_does_not_depend_on_how_many_are_generated() -> None:
+    few, many = plan_cases(6, seed=2), plan_cases(30, seed=2)
+    assert [(s.kind, s.effects, s.parameter_errors) for s in few] == [
+        (s.kind, s.effects, s.parameter_errors) for s in many[:6]
+    ]
+    assert plan_cases(6, seed=3)[1].effects != few[1].effects
+
+
+def test_generated_cases_keep_their_labels_apart(tmp_path: Path) -> None:
+    labels_path = generate_cases(tmp_path / "bench", 2, seed=4, pulsing_s=0.4)
+    assert labels_path == tmp_path / "bench" / "labels.json"
+    cases = sorted(p.name for p in (tmp_path / "bench" / "cases").iterdir())
+    assert cases == ["000", "001"]
+    labels = json.loads(labels_path.read_text())["cases"]
+    for case in cases:
+        folder = tmp_path / "bench" / "cases" / case
+        assert sorted(p.name for p in folder.iterdir()) == ["recording", "rig.yaml"]
+        label = labels[case]
+        nominal = nominal_rigs()[label["nominal_rig"]]
+        assert rig_to_mapping(load_rig(folder / "rig.yaml"))["rig"] == {
+            **rig_to_mapping(nominal)["rig"]
+        }
+        recording = read_recording(folder / "recording")
+        assert recording.time.size == 3 * 1400
+        assert label["expected_effects"] == sorted(e["name"] for e in label["effects"])
+        assert label["truth_rig"]["rig"]["caliper"]["stiffness"] != nominal.caliper_stiffness
+    assert labels["000"]["kind"] == "null" and labels["000"]["expected_effects"] == []
+    with pytest.raises(FileExistsError):
+        generate_cases(tmp_path / "bench", 1, seed=4, pulsing_s=0.4)
