@@ -64,7 +64,6 @@ import time
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray
-import rclpy
 from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 
@@ -338,20 +337,12 @@ class CaliperModelNode(Node):
 
 def main(args: list[str] | None = None) -> int:
     """Entry point ``caliper_model``: run until SIGINT/SIGTERM."""
-    common.init_ros(args)
-    try:
-        node = CaliperModelNode()
-    except (BrakeHilError, ParameterException) as err:
-        print(f"{NAME}: error: {err}", file=sys.stderr)
-        rclpy.shutdown()
-        return 2
-    try:
+
+    def run(node: CaliperModelNode) -> bool:
         common.wait_for_signal(lambda: not node.running)
-    finally:
-        node.close()
-        node.destroy_node()
-        rclpy.shutdown()
-    return 0 if node.loop_error is None else 1
+        return node.loop_error is None
+
+    return common.run_node(NAME, args, CaliperModelNode, (BrakeHilError, ParameterException), run)
 
 
 if __name__ == "__main__":

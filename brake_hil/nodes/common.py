@@ -29,7 +29,7 @@ import struct
 import sys
 import threading
 import time
-from typing import Any
+from typing import Any, TypeVar
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Vector3Stamped, WrenchStamped
@@ -370,3 +370,34 @@ def _spin(executor: Executor, stop: threading.Event, failed: threading.Event) ->
     finally:
         stop.set()
 
+
+NodeT = TypeVar("NodeT", bound=Node)
+
+
+def run_node(
+    name: str,
+    args: Sequence[str] | None,
+    make_node: Callable[[], NodeT],
+    bad_input: tuple[type[BaseException], ...],
+    run: Callable[[NodeT], bool],
+) -> int:
+    """The life of a node process: init (loopback discovery), build, run, close, shut down.
+
+    A node that cannot be built from its parameters (``bad_input``) exits 2 with one line;
+    ``run`` returns whether the node stayed healthy (exit 0, else 1). ``close()`` and
+    ``destroy_node()`` always run, so a recording is finalised even after an error.
+    """
+    init_ros(args)
+    try:
+        node = make_node()
+    except bad_input as err:
+        print(f"{name}: error: {err}", file=sys.stderr)
+        rclpy.shutdown()
+        return 2
+    try:
+        healthy = run(node)
+    finally:
+        node.close()  # type: ignore[attr-defined]
+        node.destroy_node()
+        rclpy.shutdown()
+    return 0 if healthy else 1

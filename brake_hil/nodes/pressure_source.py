@@ -59,7 +59,6 @@ import time
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray
-import rclpy
 from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -425,20 +424,13 @@ class PressureSourceNode(Node):
 
 def main(args: list[str] | None = None) -> int:
     """Entry point ``pressure_source``: run until SIGINT/SIGTERM."""
-    common.init_ros(args)
-    try:
-        node = PressureSourceNode()
-    except (BrakeHilError, ParameterException) as err:
-        print(f"{NAME}: error: {err}", file=sys.stderr)
-        rclpy.shutdown()
-        return 2
-    try:
-        healthy = common.spin_until_signal(node, node.exit_requested)
-    finally:
-        node.close()
-        node.destroy_node()
-        rclpy.shutdown()
-    return 0 if healthy else 1
+    return common.run_node(
+        NAME,
+        args,
+        PressureSourceNode,
+        (BrakeHilError, ParameterException),
+        lambda node: common.spin_until_signal(node, node.exit_requested),
+    )
 
 
 if __name__ == "__main__":

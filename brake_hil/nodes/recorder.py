@@ -42,7 +42,6 @@ import sys
 import time
 from typing import Any
 
-import rclpy
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rosbags.interfaces import (
@@ -173,9 +172,7 @@ class RecorderNode(Node):
         def on_message(data: bytes) -> None:
             write(handle, time.time_ns(), data)
 
-        self._recorded[name] = self.create_subscription(
-            cls, name, on_message, qos, raw=True
-        )
+        self._recorded[name] = self.create_subscription(cls, name, on_message, qos, raw=True)
         self.get_logger().info(f"recording {name} ({msgtype})")
 
     def drain(self, quiet_s: float = 0.05, timeout_s: float = 0.5) -> None:
@@ -202,21 +199,14 @@ class RecorderNode(Node):
 
 def main(args: list[str] | None = None) -> int:
     """Entry point ``recorder``: record until SIGINT/SIGTERM, then drain and finish."""
-    common.init_ros(args)
-    try:
-        node = RecorderNode()
-    except (OSError, ValueError) as err:  # the bag exists, the directory is not writable
-        print(f"recorder: error: {err}", file=sys.stderr)
-        rclpy.shutdown()
-        return 2
-    try:
+
+    def run(node: RecorderNode) -> bool:
         common.spin_until_signal(node)
         node.drain()
-    finally:
-        node.close()
-        node.destroy_node()
-        rclpy.shutdown()
-    return 0
+        return True
+
+    # OSError, ValueError: the bag exists, the directory is not writable.
+    return common.run_node("recorder", args, RecorderNode, (OSError, ValueError), run)
 
 
 if __name__ == "__main__":

@@ -43,7 +43,6 @@ from typing import Any, NamedTuple
 
 from diagnostic_msgs.msg import DiagnosticArray
 import numpy as np
-import rclpy
 from rclpy.node import Node
 
 from brake_hil.core.excitation import pulsing_profile
@@ -116,9 +115,7 @@ def precompute_run(
         excitation = seed_pulsing(
             max_pressures, ramp_s=ramp_s, pulsing_s=pulsing_s, pulsing_hz=pulsing_hz
         )
-        run = simulate_rig(
-            rig, [parse_effect(text) for text in effects], excitation, seed=seed
-        )
+        run = simulate_rig(rig, [parse_effect(text) for text in effects], excitation, seed=seed)
         return EmulatedRun(dict(run.measured), f"virtual rig: {excitation.label}")
     if simulator != "lti":
         raise BrakeHilError(f"simulator must be 'virtual_rig' or 'lti', got {simulator!r}")
@@ -239,7 +236,10 @@ class RigEmulatorNode(Node):
         self._can: _CanOutput | None = None
         if self.output in ("can", "both"):
             self._can = _CanOutput(
-                str(can_interface), str(can_channel), int(can_bitrate), str(can_link),
+                str(can_interface),
+                str(can_channel),
+                int(can_bitrate),
+                str(can_link),
                 str(dbc_file),
             )
             self.get_logger().info(f"CAN frames on {self._can.where}")
@@ -330,20 +330,12 @@ class RigEmulatorNode(Node):
 
 def main(args: list[str] | None = None) -> int:
     """Entry point ``rig_emulator``: play until SIGINT/SIGTERM (or the end, ``loop: false``)."""
-    common.init_ros(args)
-    try:
-        node = RigEmulatorNode()
-    except (BrakeHilError, OSError) as err:
-        print(f"{NAME}: error: {err}", file=sys.stderr)
-        rclpy.shutdown()
-        return 2
-    try:
+
+    def run(node: RigEmulatorNode) -> bool:
         common.spin_until_signal(node, node.exit_requested)
-    finally:
-        node.close()
-        node.destroy_node()
-        rclpy.shutdown()
-    return 0
+        return True
+
+    return common.run_node(NAME, args, RigEmulatorNode, (BrakeHilError, OSError), run)
 
 
 if __name__ == "__main__":
