@@ -1,4 +1,5 @@
-"""Topic names, message types and fields of the interface contract (interface.md)."""
+"""Topic names, message types and fields, and the effect names, of the interface contract
+(interface.md)."""
 
 from __future__ import annotations
 
@@ -47,3 +48,17 @@ ALL_TOPICS = (MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS, AIR_PRESSURE, *PREDIC
 
 OUTPUT_CHANNELS = ("p_b", "F_k", "x_c")
 """Channel keys used in metrics and JSON."""
+
+EFFECT_NAMES = (
+    "seal_stick_slip",
+    "seal_groove_asymmetry",
+    "entrained_air",
+    "orifice_flow",
+    "hose_compliance",
+    "bore_friction",
+    "eccentric_load",
+    "thermal_drift",
+    "sensor_delay",
+)
+"""interface.md's effect table in its order, less ``unexplained`` (the virtual rig simulates
+each, the diagnosis has a candidate for each)."""

@@ -56,8 +56,6 @@ report is published and the statistics file written.
 from __future__ import annotations
 
 from collections.abc import Sequence
-import json
-from pathlib import Path
 import struct
 import sys
 import time
@@ -329,20 +327,14 @@ class CaliperModelNode(Node):
             f"{counters.samples} samples in, {counters.predictions} predictions out, "
             f"{counters.overruns} overruns, {counters.late_ticks} ticks over 1 ms late"
         )
-        if self._statistics_file:
-            path = Path(self._statistics_file)
-            path.parent.mkdir(parents=True, exist_ok=True)
-            path.write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+        common.write_summary(self._statistics_file, summary)
 
 
 def main(args: list[str] | None = None) -> int:
     """Entry point ``caliper_model``: run until SIGINT/SIGTERM."""
-
-    def run(node: CaliperModelNode) -> bool:
-        common.wait_for_signal(lambda: not node.running)
-        return node.loop_error is None
-
-    return common.run_node(NAME, args, CaliperModelNode, (BrakeHilError, ParameterException), run)
+    return common.run_node(
+        NAME, args, CaliperModelNode, (BrakeHilError, ParameterException), common.run_until_stopped
+    )
 
 
 if __name__ == "__main__":

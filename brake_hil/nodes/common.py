@@ -20,6 +20,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Mapping, Sequence
+import json
 import math
 from operator import attrgetter
 import os
@@ -403,3 +404,19 @@ def run_node(
         node.destroy_node()
         rclpy.shutdown()
     return 0 if healthy else 1
+
+
+def write_summary(path: str, summary: object) -> None:
+    """Write a node's closing figures as JSON to ``path`` (nothing when it is empty)."""
+    if not path:
+        return
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    target.write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+
+
+def run_until_stopped(node: Any) -> bool:
+    """``run`` of :func:`run_node` for nodes that work on their own thread: wait for a
+    signal or the node's end; healthy unless its loop failed."""
+    wait_for_signal(lambda: not node.running)
+    return node.loop_error is None

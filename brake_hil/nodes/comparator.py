@@ -30,9 +30,7 @@ run's per-channel means over every steady cycle scored, as JSON.
 from __future__ import annotations
 
 from collections.abc import Callable
-import json
 import math
-from pathlib import Path
 import struct
 import sys
 from typing import Any
@@ -286,20 +284,14 @@ class ComparatorNode(Node):
                     f"{key} {entry[key]:.4g}" for key in METRIC_KEYS if math.isfinite(entry[key])
                 )
                 self.get_logger().info(f"{channel}: {text} over {entry['cycles']} cycles")
-        if self._summary_file:
-            path = Path(self._summary_file)
-            path.parent.mkdir(parents=True, exist_ok=True)
-            path.write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+        common.write_summary(self._summary_file, summary)
 
 
 def main(args: list[str] | None = None) -> int:
     """Entry point ``comparator``: run until SIGINT/SIGTERM."""
-
-    def run(node: ComparatorNode) -> bool:
-        common.wait_for_signal(lambda: not node.running)
-        return node.loop_error is None
-
-    return common.run_node(NAME, args, ComparatorNode, (BrakeHilError, ParameterException), run)
+    return common.run_node(
+        NAME, args, ComparatorNode, (BrakeHilError, ParameterException), common.run_until_stopped
+    )
 
 
 if __name__ == "__main__":

@@ -1,4 +1,5 @@
-"""The core and the I/O layer import with rclpy made unimportable (style.md)."""
+"""The core, the I/O layer, the diagnosis and the virtual rig import with rclpy made
+unimportable (style.md)."""
 
 from __future__ import annotations
 
@@ -18,7 +19,12 @@ CORE_MODULES = [
     "brake_hil.io.can_daq",
     "brake_hil.core.diagnosis.diagnose",
     "brake_hil.core.diagnosis.improved_model",
+    "brake_hil.virtual_rig",
+    "brake_hil.virtual_rig.effects",
     "brake_hil.virtual_rig.simulator",
+    "brake_hil.virtual_rig.cases",
+    "brake_hil.virtual_rig.bag",
+    "brake_hil.virtual_rig.cli",
     "brake_hil.scoring",
     "brake_hil.cli",
 ]

@@ -8,21 +8,12 @@ import re
 import numpy as np
 import pytest
 
+from brake_hil.topics import EFFECT_NAMES
 from brake_hil.virtual_rig import EFFECTS, EffectError, make_effect, parse_effect
 from brake_hil.virtual_rig.effects import Effect
 from test.virtual_rig.conftest import RunFactory
 
-INTERFACE_EFFECTS = (  # interface.md's effect table, less "unexplained"
-    "seal_stick_slip",
-    "seal_groove_asymmetry",
-    "entrained_air",
-    "orifice_flow",
-    "hose_compliance",
-    "bore_friction",
-    "eccentric_load",
-    "thermal_drift",
-    "sensor_delay",
-)
+INTERFACE_EFFECTS = EFFECT_NAMES  # interface.md's effect table, less "unexplained"
 SHORT = {"max_pressures": (1.38e6,), "pulsing_s": 0.6}
 
 

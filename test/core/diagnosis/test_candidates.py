@@ -13,20 +13,10 @@ from brake_hil.core.diagnosis.engine import ModelSpec, simulate_batch
 from brake_hil.core.excitation import pulsing_profile
 from brake_hil.core.parameters import chamber_volumes, derive_parameters, seal_properties
 from brake_hil.core.rig import Rig
+from brake_hil.topics import EFFECT_NAMES
 from test.conftest import PROJECT
 
 INTERFACE = PROJECT.parent / "shared" / "docs" / "interface.md"
-EFFECT_NAMES = (
-    "seal_stick_slip",
-    "seal_groove_asymmetry",
-    "entrained_air",
-    "orifice_flow",
-    "hose_compliance",
-    "bore_friction",
-    "eccentric_load",
-    "thermal_drift",
-    "sensor_delay",
-)
 
 
 def test_there_is_one_candidate_per_effect_of_the_interface() -> None:
