@@ -226,19 +226,39 @@ def run_chain(
         time.sleep(1.0)  # the model drains, the comparator scores its last cycle
         result.wall_s = time.monotonic() - started
     finally:
-        for node in reversed(nodes):  # source, model, comparator, recorder
-            cpu = node.cpu_seconds()
-            if cpu is not None:
-                result.cpu_s[node.name] = cpu
-            if node.name == "recorder":
-                time.sleep(1.0)  # let it write what it has queued
-            result.exit_codes[node.name] = stop_node(node)
+        _stop_all(nodes, result)
+    return _collect(
+        result, logs, bag_name if has_recorder else None, model_file, mean_pressure, echo
+    )
+
+
+def _stop_all(nodes: list[NodeProcess], result: ChainResult) -> None:
+    """Stop the nodes, last started first (source, model, comparator, recorder)."""
+    for node in reversed(nodes):
+        cpu = node.cpu_seconds()
+        if cpu is not None:
+            result.cpu_s[node.name] = cpu
+        if node.name == "recorder":
+            time.sleep(1.0)  # let it write what it has queued
+        result.exit_codes[node.name] = stop_node(node)
+
+
+def _collect(
+    result: ChainResult,
+    logs: Path,
+    bag_name: str | None,
+    model_file: Path,
+    mean_pressure: float,
+    echo: Callable[[str], None],
+) -> ChainResult:
+    """Read what the nodes left (summaries, the bag), check the bag, print the result."""
+    out_dir = result.out_dir
     failed = {name: code for name, code in result.exit_codes.items() if code != 0}
     if failed:
         echo(f"nodes exited with errors: {failed}; logs in {logs}")
     result.comparator = _read_json(out_dir / "comparator.json")
     result.model = _read_json(out_dir / "caliper_model.json")
-    if has_recorder and (out_dir / bag_name / "metadata.yaml").is_file():
+    if bag_name is not None and (out_dir / bag_name / "metadata.yaml").is_file():
         result.bag = out_dir / bag_name
         try:
             result.check = check_recorded_predictions(result.bag, model_file, mean_pressure)
@@ -246,6 +266,98 @@ def run_chain(
             echo(f"the recording cannot be checked: {err}")
     _print_result(result, echo)
     return result
+
+
+def run_can_chain(
+    rig_file: Path = DEFAULT_MODEL,
+    effects: Sequence[str] = (),
+    model_file: Path = DEFAULT_MODEL,
+    out_dir: Path = PROJECT / "out" / "chain_can",
+    pulsing_s: float = 5.0,
+    domain_id: int | None = None,
+    echo: Callable[[str], None] = print,
+) -> ChainResult:
+    """The chain against the rig emulator over CAN, without hardware.
+
+    rig_emulator plays a virtual-rig run of ``rig_file`` (with ``effects``) in real time as
+    the DBC's CAN frames on an slcan pseudo-terminal; pressure_source reads them as a DAQ
+    (mode ``can``) and publishes the measured topics; then model, comparator and recorder as
+    in :func:`run_chain`.
+    """
+    load_model(model_file, 1.0e6)  # a bad model file fails here, with one line
+    env = ros_environment(domain_id)
+    logs = out_dir / "logs"
+    result = ChainResult(out_dir)
+    bag_name = "chain_can_" + datetime.now(UTC).strftime("%Y_%m_%d-%H_%M_%S")
+    link = out_dir / "rig_can"
+    out_dir.mkdir(parents=True, exist_ok=True)
+    link.unlink(missing_ok=True)
+    max_pressure = 1.38e6
+    mean_pressure = max_pressure * (1.0 - 0.22)  # the emulator's pulsing mean (excitation.py)
+    nodes: list[NodeProcess] = []
+    echo(
+        f"chain over CAN: rig_emulator ({rig_file}, effects {list(effects) or 'none'}) -> "
+        f"slcan {link} -> pressure_source -> model {model_file}, "
+        f"ROS_DOMAIN_ID {env['ROS_DOMAIN_ID']}"
+    )
+    try:
+        nodes.append(
+            start_node("recorder", {"output_dir": str(out_dir), "bag_name": bag_name}, env, logs)
+        )
+        nodes.append(
+            start_node("comparator", {"summary_file": str(out_dir / "comparator.json")}, env, logs)
+        )
+        nodes.append(
+            start_node(
+                "caliper_model",
+                {
+                    "model_file": str(model_file),
+                    "mean_pressure": mean_pressure,
+                    "statistics_file": str(out_dir / "caliper_model.json"),
+                },
+                env,
+                logs,
+            )
+        )
+        emulator = start_node(
+            "rig_emulator",
+            {
+                "rig_file": str(rig_file),
+                "effects": list(effects) or [""],
+                "max_pressures": [max_pressure],
+                "pulsing_s": pulsing_s,
+                "loop": False,
+                "output": "can",
+                "can_link_path": str(link),
+                "start_delay_s": 3.0,
+            },
+            env,
+            logs,
+        )
+        nodes.append(emulator)
+        nodes.append(
+            start_node(
+                "pressure_source",
+                {
+                    "mode": "can",
+                    "can_interface": "slcan",
+                    "can_channel": str(link),
+                    "can_bitrate": 1_000_000,
+                },
+                env,
+                logs,
+            )
+        )
+        started = time.monotonic()
+        try:
+            emulator.process.wait(pulsing_s + 120.0)
+        except subprocess.TimeoutExpired:
+            echo("rig_emulator did not finish in time: stopping it")
+        time.sleep(1.0)
+        result.wall_s = time.monotonic() - started
+    finally:
+        _stop_all(nodes, result)
+    return _collect(result, logs, bag_name, model_file, mean_pressure, echo)
 
 
 def _read_json(path: Path) -> dict[str, Any] | None:
@@ -355,8 +467,29 @@ def main(argv: Sequence[str] | None = None) -> int:
         default=0,
         help="SCHED_FIFO priority of the source's and the model's loop threads (0: none)",
     )
+    parser.add_argument(
+        "--can-emulator",
+        action="store_true",
+        help="instead of replaying RECORDING, run against the rig emulator over CAN (slcan pty)",
+    )
+    parser.add_argument(
+        "--effect",
+        action="append",
+        default=[],
+        help="with --can-emulator: a virtual-rig effect, NAME[=STRENGTH]",
+    )
     args = parser.parse_args(argv)
     try:
+        if args.can_emulator:
+            out = (
+                args.out
+                if args.out != PROJECT / "out" / "chain"
+                else PROJECT / "out" / "chain_can"
+            )
+            result = run_can_chain(
+                args.model, args.effect, args.model, out, domain_id=args.domain_id
+            )
+            return 1 if any(code != 0 for code in result.exit_codes.values()) else 0
         result = run_chain(
             args.recording,
             args.model,

@@ -22,7 +22,7 @@ from brake_hil.topics import (
     CALIPER_DISPLACEMENT,
     MASTER_CYLINDER_PRESSURE,
 )
-from test.conftest import CONFIG, PEER_DATA
+from test.conftest import CONFIG, PEER_DATA, PROJECT
 
 RIG = CONFIG / "rig_default.yaml"
 
@@ -228,3 +228,30 @@ def test_rosbag2s_own_bags_are_opened_and_the_brake_topics_named_missing(bag: st
     line = _single_error_line(brake_hil("compare", path, "--rig", RIG))
     assert "/brake/master_cylinder/pressure" in line
     assert "the recording holds" in line
+
+
+def test_diagnose_on_a_parameter_error_only_finds_no_missing_physics(tmp_path: Path) -> None:
+    """The bundled LTI recording: the truth's caliper and valve differ from the rig file."""
+    bag = PROJECT / "bags" / "one_washer_lti"
+    result = brake_hil("diagnose", bag, "--rig", RIG, "--out", tmp_path / "d")
+    assert result.returncode == 0, result.stderr
+    diagnosis = json.loads((tmp_path / "d" / "diagnosis.json").read_text())
+    assert diagnosis["verdict"]["effects"] == []
+    assert set(diagnosis["baseline"]["metrics"]) == {"p_b", "F_k", "x_c"}
+    assert len(diagnosis["hypotheses"]) == 9
+    multipliers = diagnosis["calibration"]["multipliers"]
+    assert multipliers["caliper_stiffness"] == pytest.approx(3.4e7 / 4.0e7, rel=0.03)
+    for name in ("report.html", "improved_model.json", "held_out.png", "harmonics.png"):
+        assert (tmp_path / "d" / name).stat().st_size > 500, name
+
+
+@pytest.mark.parametrize("command", ["diagnose", "benchmark"])
+def test_diagnose_and_benchmark_refuse_bad_input_with_one_line(
+    command: str, tmp_path: Path
+) -> None:
+    if command == "diagnose":
+        args = ["diagnose", tmp_path / "nothing", "--rig", RIG, "--out", tmp_path / "d"]
+    else:
+        args = ["benchmark", tmp_path / "empty"]
+    line = _single_error_line(brake_hil(*args))
+    assert str(tmp_path) in line
