@@ -22,7 +22,7 @@ from brake_hil.topics import (
     CALIPER_DISPLACEMENT,
     MASTER_CYLINDER_PRESSURE,
 )
-from test.conftest import CONFIG, PEER_DATA, PROJECT
+from test.conftest import CONFIG, PEER_DATA
 
 RIG = CONFIG / "rig_default.yaml"
 
@@ -231,8 +231,27 @@ def test_rosbag2s_own_bags_are_opened_and_the_brake_topics_named_missing(bag: st
 
 
 def test_diagnose_on_a_parameter_error_only_finds_no_missing_physics(tmp_path: Path) -> None:
-    """The bundled LTI recording: the truth's caliper and valve differ from the rig file."""
-    bag = PROJECT / "bags" / "one_washer_lti"
+    """A virtual-rig recording whose caliper is 15 % softer than the rig file says."""
+    truth = tmp_path / "truth.yaml"
+    truth.write_text(RIG.read_text().replace("stiffness: 4.0e7", "stiffness: 3.4e7"))
+    bag = tmp_path / "rec"
+    made = brake_hil(
+        "simulate",
+        "--rig",
+        truth,
+        "--out",
+        bag,
+        "--engine",
+        "virtual",
+        "--max-pressure",
+        "1.38e6",
+        "2.76e6",
+        "--pulsing-seconds",
+        "3",
+        "--seed",
+        "4",
+    )
+    assert made.returncode == 0, made.stderr
     result = brake_hil("diagnose", bag, "--rig", RIG, "--out", tmp_path / "d")
     assert result.returncode == 0, result.stderr
     diagnosis = json.loads((tmp_path / "d" / "diagnosis.json").read_text())
