@@ -63,7 +63,6 @@ from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.exceptions import ParameterException
-from rclpy.node import Node
 
 from brake_hil.core.model_file import load_model
 from brake_hil.core.parameters import DEFAULT_MEAN_PRESSURE
@@ -91,8 +90,10 @@ INPUT_LEVELS = {
 }
 
 
-class CaliperModelNode(Node):
+class CaliperModelNode(common.LoopNode):
     """Steps the caliper model for every received ``p_i`` sample on a 1 kHz deadline loop."""
+
+    loop_name = "model loop"
 
     def __init__(self) -> None:
         # No parameter services: nothing spins this node but its loop (parameters are
@@ -229,20 +230,6 @@ class CaliperModelNode(Node):
             if not prediction.held:
                 add("latency", published - prediction.arrival_ns)
                 add("stamp_age", wall - prediction.stamp_ns)
-
-    @property
-    def running(self) -> bool:
-        """True while the model loop runs."""
-        return self._loop.running
-
-    @property
-    def loop_error(self) -> BaseException | None:
-        """What stopped the model loop, None while it runs or after a clean stop."""
-        return self._loop.error
-
-    def _on_loop_error(self, error: BaseException) -> None:
-        if self.context.ok():
-            self.get_logger().fatal(f"model loop stopped: {type(error).__name__}: {error}")
 
     # -- reporting -----------------------------------------------------------------------
 

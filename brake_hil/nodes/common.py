@@ -415,6 +415,29 @@ def write_summary(path: str, summary: object) -> None:
     target.write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
 
 
+class LoopNode(Node):
+    """A node whose work runs on a loop thread of its own (``self._loop``, with ``running``
+    and ``error``): what :func:`run_until_stopped` waits on and reports."""
+
+    _loop: Any
+    loop_name = "loop"
+
+    @property
+    def running(self) -> bool:
+        """True while the node's loop runs."""
+        return bool(self._loop.running)
+
+    @property
+    def loop_error(self) -> BaseException | None:
+        """What stopped the loop, None while it runs or after a clean stop."""
+        error: BaseException | None = self._loop.error
+        return error
+
+    def _on_loop_error(self, error: BaseException) -> None:
+        if self.context.ok():
+            self.get_logger().fatal(f"{self.loop_name} stopped: {type(error).__name__}: {error}")
+
+
 def run_until_stopped(node: Any) -> bool:
     """``run`` of :func:`run_node` for nodes that work on their own thread: wait for a
     signal or the node's end; healthy unless its loop failed."""

@@ -38,7 +38,6 @@ from typing import Any
 from diagnostic_msgs.msg import DiagnosticArray
 import numpy as np
 from rclpy.exceptions import ParameterException
-from rclpy.node import Node
 
 from brake_hil.core.realtime import DeadlineLoop, Tick
 from brake_hil.core.regression import (
@@ -57,8 +56,10 @@ from brake_hil.topics import MEASURED_OUTPUTS, OUTPUT_CHANNELS, PREDICTED_OUTPUT
 NAME = "comparator"
 
 
-class ComparatorNode(Node):
+class ComparatorNode(common.LoopNode):
     """Pairs predictions with measurements by stamp and scores them once a cycle."""
+
+    loop_name = "comparator loop"
 
     def __init__(self) -> None:
         # One thread does all the work (no executor, so no parameter services): it takes the
@@ -127,20 +128,6 @@ class ComparatorNode(Node):
                     self.corrupt += 1
                     continue
                 add(stamp, value)
-
-    @property
-    def running(self) -> bool:
-        """True while the comparator's loop runs."""
-        return self._loop.running
-
-    @property
-    def loop_error(self) -> BaseException | None:
-        """What stopped the loop, None while it runs or after a clean stop."""
-        return self._loop.error
-
-    def _on_loop_error(self, error: BaseException) -> None:
-        if self.context.ok():
-            self.get_logger().fatal(f"comparator loop stopped: {type(error).__name__}: {error}")
 
     def _evaluate(self) -> None:
         """Score every cycle whose window (and guard period) the paired samples now cover."""
