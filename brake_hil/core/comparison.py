@@ -120,12 +120,12 @@ def compare(recording: Recording, rig: Rig, params: ModelParameters | None = Non
     period = 1.0 / rig.excitation_hz
     windows = steady_windows(recording, filtered["p_i"], rig)
     predicted = {key: np.full(time.size, np.nan) for key in OUTPUT_CHANNELS}
+    fixed = None if params is None else predict(filtered["p_i"], params)  # one run serves all
     segments = []
     for start, end in windows:
         part = signals.segment_slice(time, start, end)
         mean_pressure = float(np.mean(filtered["p_i"][part]))
-        segment_params = params or derive_parameters(rig, mean_pressure)
-        outputs = predict(filtered["p_i"], segment_params)
+        outputs = fixed or predict(filtered["p_i"], derive_parameters(rig, mean_pressure))
         metrics = {}
         for key in OUTPUT_CHANNELS:
             predicted[key][part] = outputs[key][part]
