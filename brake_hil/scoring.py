@@ -45,6 +45,7 @@ class CaseResult:
     improved_nrmse: dict[str, float]
     error: str = ""
     improvements: dict[str, float] = field(default_factory=dict)  # hypothesis -> ratio
+    summary: dict[str, object] = field(default_factory=dict)  # the decision's inputs
 
 
 def diagnose_case(case_dir: Path) -> CaseResult:
@@ -69,6 +70,7 @@ def diagnose_case(case_dir: Path) -> CaseResult:
             "+".join(h.effects): result.baseline.held_out_cost / max(h.held_out_cost, 1e-15)
             for h in result.hypotheses
         },
+        summary=result.summary.as_dict(),
     )
 
 

@@ -286,9 +286,7 @@ def harmonic_energy_shares(
 # --------------------------------------------------------------------------- cycles
 
 
-def harmonic_phasor(
-    signal: npt.ArrayLike, time_s: npt.ArrayLike, frequency_hz: float
-) -> complex:
+def harmonic_phasor(signal: npt.ArrayLike, time_s: npt.ArrayLike, frequency_hz: float) -> complex:
     """Complex amplitude ``X`` of the ``frequency_hz`` component: ``x(t) ~ Re(X e^{jwt})``.
 
     Least-squares fit of ``offset + drift t + a cos(wt) + b sin(wt)`` over the samples
@@ -303,7 +301,6 @@ def harmonic_phasor(
     basis = np.column_stack([np.ones_like(time), centred, np.cos(phase), np.sin(phase)])
     coefficients, *_ = np.linalg.lstsq(basis, values, rcond=None)
     return complex(coefficients[2], -coefficients[3])
-
 
 
 def whole_cycles(

@@ -67,11 +67,22 @@ def _time_plot(diagnosis: Diagnosis, path: Path) -> Path:
         top, bottom = axes[0, column], axes[1, column]
         for label in ("measured", "baseline", "improved"):
             style = "-" if label == "measured" else "--"
-            top.plot(time[shown], data[label][key][shown] * scale, style,
-                     color=COLOURS[label], label=label, lw=1.3)
+            top.plot(
+                time[shown],
+                data[label][key][shown] * scale,
+                style,
+                color=COLOURS[label],
+                label=label,
+                lw=1.3,
+            )
         for label in ("baseline", "improved"):
-            bottom.plot(time[shown], (data[label][key] - data["measured"][key])[shown] * scale,
-                        color=COLOURS[label], lw=1.0, label=label)
+            bottom.plot(
+                time[shown],
+                (data[label][key] - data["measured"][key])[shown] * scale,
+                color=COLOURS[label],
+                lw=1.0,
+                label=label,
+            )
         top.set_title(f"{key}, held-out cycles", fontsize=10)
         top.set_ylabel(unit)
         bottom.set_ylabel(f"residual, {unit}")
@@ -194,6 +205,6 @@ td,th{{border:1px solid #ccc;padding:3px 8px}}table{{border-collapse:collapse}}<
 <h2>Calibrated baseline (multipliers of the nominal rig)</h2><p>{html.escape(calibration)}</p>
 <h2>Hypotheses (held-out improvement of mean squared error)</h2>
 <table><tr><th>effect</th><th>improvement</th><th>parameters (± one sigma)</th></tr>
-{''.join(hypotheses)}</table>
+{"".join(hypotheses)}</table>
 </body></html>
 """

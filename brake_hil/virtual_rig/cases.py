@@ -8,7 +8,9 @@ reads. A case is:
 * ``null``: a parameter error only (truth differs from nominal within the rig tolerances);
 * ``single``: one effect at a ``subtle`` (strength 0.15-0.35) or ``strong`` (0.7-1.0)
   strength, on top of a parameter error;
-* ``pair``: two different effects, each subtle or strong.
+* ``pair``: two different effects, each subtle or strong;
+* ``unexplained``: physics outside the diagnosis's library (``OUT_OF_LIBRARY``: a transducer
+  gain that changes with its reading), subtle or strong, labelled ``["unexplained"]``.
 
 :func:`plan_cases` fixes the schedule so that the first cases already cover every kind: null
 cases, every effect both subtle and strong, and pairs. Every draw comes from
@@ -36,8 +38,9 @@ from brake_hil import __version__
 from brake_hil.core.excitation import SEED_MAX_PRESSURES
 from brake_hil.core.rig import Rig, rig_from_mapping
 from brake_hil.virtual_rig.bag import write_run
-from brake_hil.virtual_rig.effects import EFFECTS, Effect, make_effect
+from brake_hil.virtual_rig.effects import EFFECTS, OUT_OF_LIBRARY, Effect, make_effect
 from brake_hil.virtual_rig.effects.sensor_delay import CHANNELS
+from brake_hil.virtual_rig.effects.sensor_nonlinearity import NONLINEAR_CHANNELS
 from brake_hil.virtual_rig.excitation import Excitation, seed_pulsing, solenoid_pulsing
 from brake_hil.virtual_rig.rig_yaml import rig_to_mapping, rig_with_values, write_rig
 from brake_hil.virtual_rig.simulator import simulate_rig
@@ -119,7 +122,7 @@ class CaseSpec:
     """What one case holds (the label) before it is simulated."""
 
     number: int
-    kind: str  # null, single or pair
+    kind: str  # null, single, pair or unexplained
     strength_class: str  # none (null), subtle, strong, or mixed (a pair of both)
     effects: tuple[Effect, ...]
     nominal_key: str  # which of the nominal rigs
@@ -136,8 +139,9 @@ class CaseSpec:
 def _schedule(count: int, seed: int) -> Iterator[tuple[str, tuple[str, ...], tuple[str, ...]]]:
     """(kind, effect names, strength classes) for each case, covering every kind early.
 
-    Per round of ``2 * E + 2 + 4`` cases (``E`` effects): two null cases, each effect once
-    subtle and once strong (subtle first for half of them), four pairs.
+    Per round of ``2 * E + 2 + 4 + 2`` cases (``E`` effects): two null cases, each effect
+    once subtle and once strong (subtle first for half of them), four pairs, and one subtle
+    and one strong out-of-library case.
     """
     names = list(EFFECTS)
     rng = np.random.default_rng([seed, 1_000_003])
@@ -157,6 +161,11 @@ def _schedule(count: int, seed: int) -> Iterator[tuple[str, tuple[str, ...], tup
             pairs.append(("pair", (names[int(a)], names[int(b)]), classes))
         round_ = [("null", (), ()), *first, pairs[0], pairs[1], ("null", (), ()), *second]
         round_ += pairs[2:]
+        outside = list(OUT_OF_LIBRARY)
+        round_ += [
+            ("unexplained", (outside[int(rng.integers(len(outside)))],), (c,))
+            for c in ("subtle", "strong")
+        ]
         for item in round_:
             if produced == count:
                 return
@@ -169,6 +178,8 @@ def _draw_effect(name: str, strength_class: str, rng: np.random.Generator) -> Ef
     strength = float(np.round(rng.uniform(low, high), 3))
     if name == "sensor_delay":
         return make_effect(name, strength, channel=str(rng.choice(CHANNELS)))
+    if name == "sensor_nonlinearity":
+        return make_effect(name, strength, channel=str(rng.choice(NONLINEAR_CHANNELS)))
     return make_effect(name, strength)
 
 
@@ -242,7 +253,11 @@ def label(spec: CaseSpec, truth: Rig, excitation: Excitation) -> dict[str, Any]:
     return {
         "kind": spec.kind,
         "strength_class": spec.strength_class,
-        "expected_effects": sorted(effect.name for effect in spec.effects),
+        "expected_effects": (
+            ["unexplained"]
+            if spec.kind == "unexplained"
+            else sorted(effect.name for effect in spec.effects)
+        ),
         "effects": [{"name": e.name, "parameters": e.values()} for e in spec.effects],
         "nominal_rig": spec.nominal_key,
         "parameter_errors": spec.parameter_errors,

@@ -33,6 +33,7 @@ if TYPE_CHECKING:
     from brake_hil.virtual_rig.effects.orifice_flow import OrificeValve
     from brake_hil.virtual_rig.effects.seal_stick_slip import LuGreSeal
     from brake_hil.virtual_rig.effects.sensor_delay import ChannelSkew
+    from brake_hil.virtual_rig.effects.sensor_nonlinearity import QuadraticGain
     from brake_hil.virtual_rig.effects.thermal_drift import HeatingLaw
 
 
@@ -78,7 +79,7 @@ class Plant:
     bore_friction: DahlBoreFriction | None = None  # bore_friction
     force_share: LoadDependentShare | None = None  # eccentric_load
     drift: HeatingLaw | None = None  # thermal_drift
-    skews: tuple[ChannelSkew, ...] = ()  # sensor_delay
+    skews: tuple[ChannelSkew | QuadraticGain, ...] = ()  # sensor_delay, sensor_nonlinearity
     effects: tuple[Effect, ...] = ()  # the active effects, installed in this order
 
 

@@ -51,6 +51,7 @@ from brake_hil.errors import BrakeHilError
 from brake_hil.virtual_rig.effects.base import Effect, Signal
 from brake_hil.virtual_rig.effects.seal_groove_asymmetry import asymmetric_spring
 from brake_hil.virtual_rig.effects.sensor_delay import ChannelSkew
+from brake_hil.virtual_rig.effects.sensor_nonlinearity import QuadraticGain
 from brake_hil.virtual_rig.excitation import Excitation, seed_pulsing
 from brake_hil.virtual_rig.plant import Plant, build_plant
 
@@ -477,23 +478,24 @@ def master_pressure_estimate(rig: Rig, excitation: Excitation) -> FloatArray:
 def acquire(
     time: FloatArray,
     true_signals: Mapping[str, FloatArray],
-    skews: Sequence[ChannelSkew] = (),
+    skews: Sequence[ChannelSkew | QuadraticGain] = (),
     seed: int = 0,
 ) -> dict[str, FloatArray]:
-    """The DAQ: skew a channel (sensor_delay), add noise, quantise (16 bits, seed's ranges).
+    """The DAQ: a channel's acquisition laws (sensor_delay, sensor_nonlinearity) in order,
+    then noise and quantisation (16 bits, seed's ranges).
 
     Channels are drawn in the order ``p_i``, ``p_b``, ``F_k``, ``x_c``, ``p_a`` from one
     generator seeded with ``seed``, so a skew leaves the other channels' noise unchanged.
     """
     rng = np.random.default_rng(seed)
-    by_channel = {skew.channel: skew for skew in skews}
     measured: dict[str, FloatArray] = {}
     for key in ("p_i", "p_b", "F_k", "x_c", "p_a"):
         if key not in true_signals:
             continue
         values = np.asarray(true_signals[key], dtype=float)
-        if key in by_channel:
-            values = by_channel[key].apply(time, values)
+        for law in skews:
+            if law.channel == key:
+                values = law.apply(time, values)
         measured[key] = measure(values, SENSORS[key], rng)
     return measured
 

@@ -20,6 +20,7 @@ from brake_hil.topics import (
     BLOCK_FORCE,
     BORE_PRESSURE,
     CALIPER_DISPLACEMENT,
+    EFFECT_NAMES,
     MASTER_CYLINDER_PRESSURE,
 )
 from test.conftest import CONFIG, PEER_DATA
@@ -257,7 +258,8 @@ def test_diagnose_on_a_parameter_error_only_finds_no_missing_physics(tmp_path: P
     diagnosis = json.loads((tmp_path / "d" / "diagnosis.json").read_text())
     assert diagnosis["verdict"]["effects"] == []
     assert set(diagnosis["baseline"]["metrics"]) == {"p_b", "F_k", "x_c"}
-    assert len(diagnosis["hypotheses"]) == 9
+    assert {h["effect"] for h in diagnosis["hypotheses"]} >= set(EFFECT_NAMES)
+    assert diagnosis["decision_inputs"]["noise_cost"] > 0
     multipliers = diagnosis["calibration"]["multipliers"]
     assert multipliers["caliper_stiffness"] == pytest.approx(3.4e7 / 4.0e7, rel=0.03)
     for name in ("report.html", "improved_model.json", "held_out.png", "harmonics.png"):

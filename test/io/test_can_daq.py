@@ -136,10 +136,14 @@ def test_a_corrupted_frame_is_dropped_and_counted(sender: can.BusABC, daq: CanDa
     good = daq.codec.encode(1, {"p_i": 1e6, "p_b": 2e6})[0]
     flipped = bytearray(good.data)
     flipped[1] ^= 0x04  # one bit of p_i
-    sender.send(can.Message(arbitration_id=good.arbitration_id, is_extended_id=False,
-                            data=flipped))
-    sender.send(can.Message(arbitration_id=good.arbitration_id, is_extended_id=False,
-                            data=bytes(good.data[:6])))  # DLC 6
+    sender.send(
+        can.Message(arbitration_id=good.arbitration_id, is_extended_id=False, data=flipped)
+    )
+    sender.send(
+        can.Message(
+            arbitration_id=good.arbitration_id, is_extended_id=False, data=bytes(good.data[:6])
+        )
+    )  # DLC 6
     sender.send(good)
     got = poll_until(daq, 1)
     time.sleep(0.02)

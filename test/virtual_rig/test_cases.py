@@ -14,22 +14,28 @@ from brake_hil.virtual_rig.cases import (
     PERTURBED_KEYS,
     STRONG_STRENGTHS,
     SUBTLE_STRENGTHS,
+    case_excitation,
     generate_cases,
+    label,
     nominal_rigs,
     plan_cases,
     truth_rig,
 )
+from brake_hil.virtual_rig.effects import OUT_OF_LIBRARY
 from brake_hil.virtual_rig.rig_yaml import rig_to_mapping
 
 
 def test_the_first_round_covers_null_cases_every_effect_both_strengths_and_pairs() -> None:
-    specs = plan_cases(24, seed=3)
+    specs = plan_cases(26, seed=3)
     singles = {(s.effects[0].name, s.strength_class) for s in specs if s.kind == "single"}
     assert singles == {(name, c) for name in EFFECTS for c in ("subtle", "strong")}
     assert sum(s.kind == "null" and not s.effects for s in specs) == 2
     pairs = [s for s in specs if s.kind == "pair"]
     assert len(pairs) == 4
     assert all(len({e.name for e in s.effects}) == 2 for s in pairs)
+    outside = [s for s in specs if s.kind == "unexplained"]
+    assert sorted(s.strength_class for s in outside) == ["strong", "subtle"]
+    assert all(s.effects[0].name in OUT_OF_LIBRARY for s in outside)
 
 
 def test_strengths_fall_in_their_class() -> None:
@@ -87,3 +93,12 @@ def test_generated_cases_keep_their_labels_apart(tmp_path: Path) -> None:
     assert labels["000"]["kind"] == "null" and labels["000"]["expected_effects"] == []
     with pytest.raises(FileExistsError):
         generate_cases(tmp_path / "bench", 1, seed=4, pulsing_s=0.4)
+
+
+def test_an_out_of_library_case_is_labelled_unexplained() -> None:
+    spec = next(s for s in plan_cases(26, seed=3) if s.kind == "unexplained")
+    nominal = nominal_rigs()[spec.nominal_key]
+    truth = truth_rig(nominal, spec.parameter_errors, "truth")
+    document = label(spec, truth, case_excitation(spec, truth, 1.0))
+    assert document["expected_effects"] == ["unexplained"]
+    assert document["effects"][0]["name"] == "sensor_nonlinearity"

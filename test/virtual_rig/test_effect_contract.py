@@ -10,26 +10,29 @@ import pytest
 
 from brake_hil.topics import EFFECT_NAMES
 from brake_hil.virtual_rig import EFFECTS, EffectError, make_effect, parse_effect
-from brake_hil.virtual_rig.effects import Effect
+from brake_hil.virtual_rig.effects import OUT_OF_LIBRARY, Effect
 from test.virtual_rig.conftest import RunFactory
 
 INTERFACE_EFFECTS = EFFECT_NAMES  # interface.md's effect table, less "unexplained"
+ALL_EFFECTS = {**EFFECTS, **OUT_OF_LIBRARY}
+EVERY_EFFECT = (*INTERFACE_EFFECTS, *OUT_OF_LIBRARY)  # the out-of-library ones keep it too
 SHORT = {"max_pressures": (1.38e6,), "pulsing_s": 0.6}
 
 
 def test_the_library_holds_every_effect_of_interface_md_and_no_other() -> None:
     assert tuple(EFFECTS) == INTERFACE_EFFECTS
+    assert not set(OUT_OF_LIBRARY) & set(INTERFACE_EFFECTS)
 
 
-@pytest.mark.parametrize("name", INTERFACE_EFFECTS)
+@pytest.mark.parametrize("name", EVERY_EFFECT)
 def test_effect_has_its_interface_name(name: str) -> None:
-    assert EFFECTS[name].name == name
+    assert ALL_EFFECTS[name].name == name
     assert make_effect(name).name == name
 
 
-@pytest.mark.parametrize("name", INTERFACE_EFFECTS)
+@pytest.mark.parametrize("name", EVERY_EFFECT)
 def test_effect_describes_its_physics_in_one_paragraph_with_a_source(name: str) -> None:
-    cls = EFFECTS[name]
+    cls = ALL_EFFECTS[name]
     description = cls.description()
     assert len(description) > 300, description
     assert "\n" not in description
@@ -42,9 +45,9 @@ def test_effect_describes_its_physics_in_one_paragraph_with_a_source(name: str) 
         assert f"{parameter.name} = " in text
 
 
-@pytest.mark.parametrize("name", INTERFACE_EFFECTS)
+@pytest.mark.parametrize("name", EVERY_EFFECT)
 def test_effect_declares_every_parameter_with_unit_and_bounds(name: str) -> None:
-    cls = EFFECTS[name]
+    cls = ALL_EFFECTS[name]
     declared = [p.name for p in cls.parameters]
     assert declared[0] == "strength"
     assert sorted(declared) == sorted(f.name for f in fields(cls))
@@ -59,13 +62,13 @@ def test_effect_declares_every_parameter_with_unit_and_bounds(name: str) -> None
             assert parameter.low <= value <= parameter.high
 
 
-@pytest.mark.parametrize("name", INTERFACE_EFFECTS)
+@pytest.mark.parametrize("name", EVERY_EFFECT)
 def test_effect_refuses_values_outside_its_bounds(name: str) -> None:
     with pytest.raises(EffectError, match=name):
         make_effect(name, 1.5)
     with pytest.raises(EffectError, match="strength"):
         make_effect(name, -0.1)
-    numeric = [p for p in EFFECTS[name].parameters[1:] if not p.choices]
+    numeric = [p for p in ALL_EFFECTS[name].parameters[1:] if not p.choices]
     if numeric:
         with pytest.raises(EffectError, match=numeric[0].name):
             make_effect(name, 0.5, **{numeric[0].name: numeric[0].high * 10 + 1})
@@ -73,7 +76,7 @@ def test_effect_refuses_values_outside_its_bounds(name: str) -> None:
         make_effect(name, 0.5, no_such_parameter=1.0)
 
 
-@pytest.mark.parametrize("name", INTERFACE_EFFECTS)
+@pytest.mark.parametrize("name", EVERY_EFFECT)
 def test_effect_at_strength_zero_changes_nothing(name: str, rig_run: RunFactory) -> None:
     plain = rig_run(**SHORT)
     zero = rig_run((name, 0.0), **SHORT)
@@ -83,7 +86,7 @@ def test_effect_at_strength_zero_changes_nothing(name: str, rig_run: RunFactory)
         assert np.array_equal(zero.measured[key], plain.measured[key])
 
 
-@pytest.mark.parametrize("name", INTERFACE_EFFECTS)
+@pytest.mark.parametrize("name", EVERY_EFFECT)
 def test_effect_at_full_strength_changes_the_recording(name: str, rig_run: RunFactory) -> None:
     plain = rig_run(**SHORT)
     full = rig_run((name, 1.0), **SHORT)
@@ -113,3 +116,17 @@ def test_effects_parse_from_the_command_line_form() -> None:
         parse_effect("orifice_flow=strong")
     with pytest.raises(EffectError, match="channel"):
         parse_effect("sensor_delay=1,channel=q")
+
+
+def test_sensor_nonlinearity_changes_only_its_channel_by_its_quadratic_law(
+    rig_run: RunFactory,
+) -> None:
+    plain = rig_run(**SHORT)
+    bent = rig_run(("sensor_nonlinearity", 1.0, {"channel": "F_k"}), **SHORT)
+    for key in ("p_i", "p_b", "x_c"):
+        assert np.array_equal(bent.measured[key], plain.measured[key])
+    force = plain.block_force
+    expected = force * (1.0 + 0.3 * force / 8.9e3)
+    resolution = 8.9e3 / (2**16 - 1)
+    error = bent.measured["F_k"] - plain.measured["F_k"] - (expected - force)
+    assert np.max(np.abs(error)) <= 1.01 * resolution

@@ -66,6 +66,27 @@ class Dataset:
         inside = self.mask(self.segments)
         return {key: float(np.ptp(value[inside])) for key, value in self.measured.items()}
 
+    def noise_cost(self) -> float:
+        """The held-out cost a perfect model would still have: the measurement's own noise.
+
+        Under steady pulsing a noise-free output repeats every period, so the difference of
+        a sample and the one a period earlier is noise (twice its variance) plus what changed
+        in one cycle. Mean over channels of that variance over the squared peak-to-peak,
+        the normalisation of ``Fit.held_out_cost``.
+        """
+        lag = int(round(self.period / self.sample_time))
+        scale = self.scale()
+        costs = []
+        for key, value in self.measured.items():
+            differences = []
+            for window in self.segments:
+                part = value[self.mask((window,))]
+                if part.size > lag:
+                    differences.append(part[lag:] - part[:-lag])
+            variance = float(np.mean(np.concatenate(differences) ** 2)) / 2 if differences else 0
+            costs.append(variance / max(scale[key], 1e-30) ** 2)
+        return float(np.mean(costs))
+
 
 def prepare(recording: Recording, rig: Rig) -> Dataset:
     """Condition, decimate and split a recording (see the module docstring)."""

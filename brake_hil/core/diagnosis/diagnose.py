@@ -15,9 +15,10 @@ file the test engineer wrote.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -35,20 +36,26 @@ from brake_hil.errors import BrakeHilError
 from brake_hil.topics import OUTPUT_CHANNELS
 
 ACCEPT_RATIO = 2.0
-"""A candidate must cut the held-out mean squared error at least this much."""
+"""A candidate must cut the held-out mean squared error at least this much ..."""
+CLEAR_EXCESS = 10.0
+"""... or ``CLEAR_ACCEPT_RATIO`` when the baseline's held-out error is this many times the
+measurement noise's share of it (a misfit that is clearly more than noise)."""
+CLEAR_ACCEPT_RATIO = 1.5
 PAIR_RATIO = 1.8
 """A second effect must cut it again at least this much ..."""
-SECOND_ALONE_RATIO = 1.3
-"""... and cut the baseline's error at least this much on its own."""
+PAIR_SHARE = 0.03
+"""... and explain at least this share of the baseline's held-out error more than it."""
+WINDOW_FLOOR = 0.0
+"""No held-out window may get worse than this times the baseline's error (0: no test)."""
 PARAMETER_PENALTY = 0.05
 """Log-ratio charged per fitted parameter when ranking (prefers the simpler of equals)."""
 UNEXPLAINED_NRMSE = 0.005
 """A held-out baseline NRMSE above this with no candidate accepted is 'unexplained'. The
 calibrated baseline of a recording with a parameter error only misses by about 0.1 % (noise
 and the virtual rig's richer line); 0.5 % is five times that."""
-UNEXPLAINED_SCALE = 0.0015
-"""NRMSE distance from UNEXPLAINED_NRMSE that makes the none/unexplained call confident."""
-PAIR_SHORTLIST = 3
+PAIR_SHORTLIST = 8
+PAIR_FIT_RATIO = 1.3
+"""Pairs are fitted when the best single cuts the held-out error at least this much."""
 
 
 @dataclass(frozen=True)
@@ -67,6 +74,7 @@ class Diagnosis:
     baseline_metrics: dict[str, dict[str, float]]
     improved_metrics: dict[str, dict[str, float]]
     dataset: Dataset
+    summary: Summary
 
     def improved_model(self, rig_path: Path) -> ImprovedModel:
         """The improved model in the form the caliper-model node loads."""
@@ -130,6 +138,7 @@ class Diagnosis:
                 "parameters": self.improved.parameters(),
                 "metrics": self.improved_metrics,
             },
+            "decision_inputs": self.summary.as_dict(),
             "split": {
                 "train": [[w.start, w.end] for w in self.dataset.train],
                 "held_out": [[w.start, w.end] for w in self.dataset.held_out],
@@ -187,43 +196,23 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
     for candidate in CANDIDATES:
         say(f"fitting {candidate.name}")
         singles.append(fit(Model(calibration, [candidate], dataset)))
-    ranked = sorted(singles, key=lambda h: _score(baseline, h), reverse=True)
-    hypotheses = list(singles)
-    eligible = [h for h in ranked if _plausible(h)]
-    chosen: Fit | None = None
-    best = eligible[0] if eligible else ranked[0]
-    if eligible and _gain(baseline, best) >= ACCEPT_RATIO:
-        chosen = best
-        own = len(best.theta) - len(calibration.sigmas)
-        for other in eligible[1 : PAIR_SHORTLIST + 1]:
-            names = (best.effects[0], other.effects[0])
-            if _shares_physics(names) or _gain(baseline, other) < SECOND_ALONE_RATIO:
-                continue
-            say(f"fitting {' + '.join(names)}")
-            pair_model = Model(calibration, [BY_NAME[n] for n in names], dataset)
-            other_own = len(other.theta) - len(calibration.sigmas)
-            start = np.concatenate([best.theta[:own], other.theta[:other_own], best.theta[own:]])
-            pair = fit(pair_model, start=start)
-            hypotheses.append(pair)
-            if (
-                len(chosen.effects) == 1
-                and _plausible(pair)
-                and chosen.held_out_cost / max(pair.held_out_cost, 1e-15) >= PAIR_RATIO
-            ):
-                chosen = pair
+    pairs = _fit_pairs(calibration, dataset, baseline, singles, say)
+    hypotheses = singles + pairs
+    summary = summarise(baseline, singles, pairs, dataset.noise_cost(), evidence)
+    verdict = decide(summary)
+    chosen = next((h for h in hypotheses if h.effects == verdict.chosen), None)
+    best = max(singles, key=lambda h: _score(baseline, h))
     baseline_nrmse = max(baseline.held_out_nrmse.values())
     if chosen is None:
         improved = baseline
-        if baseline_nrmse > UNEXPLAINED_NRMSE:
-            effects: tuple[str, ...] = ("unexplained",)
+        if verdict.effects:
             explanation = (
                 f"The calibrated LTI model misses the held-out data by up to "
-                f"{100 * baseline_nrmse:.1f} % NRMSE and no candidate cuts that error "
-                f"{ACCEPT_RATIO:g} times; the best, {best.effects[0]}, cuts it "
-                f"{baseline.held_out_cost / max(best.held_out_cost, 1e-15):.2f} times."
+                f"{100 * baseline_nrmse:.2f} % NRMSE, {summary.excess_ratio:.0f} times the "
+                f"measurement noise's share, and no candidate explains it: the best, "
+                f"{best.effects[0]}, cuts the error {_gain(baseline, best):.2f} times."
             )
         else:
-            effects = ()
             explanation = (
                 f"The calibrated LTI model explains the recording: held-out NRMSE at most "
                 f"{100 * baseline_nrmse:.2f} %, and no candidate cuts the error "
@@ -231,15 +220,13 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
             )
     else:
         improved = chosen
-        effects = chosen.effects
         explanation = _explain(baseline, chosen, evidence)
-    confidence = _confidence(baseline, ranked, chosen)
     say("scoring baseline and improved models on held-out data")
     improved_model = Model(calibration, [BY_NAME[e] for e in improved.effects], dataset)
     return Diagnosis(
         recording=str(recording.path),
-        effects=effects,
-        confidence=confidence,
+        effects=verdict.effects,
+        confidence=verdict.confidence,
         explanation=explanation,
         evidence=evidence,
         calibration=calibration,
@@ -249,7 +236,217 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         baseline_metrics=held_out_metrics(baseline_model, baseline.theta),
         improved_metrics=held_out_metrics(improved_model, improved.theta),
         dataset=dataset,
+        summary=summary,
     )
+
+
+def _fit_pairs(
+    calibration: Calibration,
+    dataset: Dataset,
+    baseline: Fit,
+    singles: list[Fit],
+    say: Progress,
+) -> list[Fit]:
+    """Pairs of the best plausible single with the next ``PAIR_SHORTLIST`` plausible ones.
+
+    Fitted whenever the best single cuts the error at least ``PAIR_FIT_RATIO`` times (the
+    decision then weighs them), starting from both singles' fitted parameters.
+    """
+    eligible = sorted(
+        (h for h in singles if _plausible(h)), key=lambda h: _score(baseline, h), reverse=True
+    )
+    if not eligible or _gain(baseline, eligible[0]) < PAIR_FIT_RATIO:
+        return []
+    best = eligible[0]
+    own = len(best.theta) - len(calibration.sigmas)
+    pairs = []
+    for other in eligible[1 : PAIR_SHORTLIST + 1]:
+        names = (best.effects[0], other.effects[0])
+        say(f"fitting {' + '.join(names)}")
+        other_own = len(other.theta) - len(calibration.sigmas)
+        start = np.concatenate([best.theta[:own], other.theta[:other_own], best.theta[own:]])
+        model = Model(calibration, [BY_NAME[n] for n in names], dataset)
+        pairs.append(fit(model, start=start))
+    return pairs
+
+
+@dataclass(frozen=True)
+class Hypothesis:
+    """What the decision needs of one fitted candidate set (numbers only)."""
+
+    effects: tuple[str, ...]
+    parameters: int  # the effects' own fitted parameters
+    held_out_cost: float  # mean over channels of the squared held-out NRMSE
+    window_costs: tuple[float, ...]  # the same per held-out window
+    plausible: bool  # fitted parameters describe the physics (Candidate.plausible)
+    consistent: bool  # the evidence shows its signature (Candidate.consistent)
+
+
+@dataclass(frozen=True)
+class Summary:
+    """The numbers a verdict is decided from; JSON-able, so a decision can be replayed."""
+
+    baseline_cost: float
+    baseline_window_costs: tuple[float, ...]
+    baseline_nrmse: float  # worst channel's held-out NRMSE
+    noise_cost: float  # the measurement noise's share of any held-out cost
+    singles: tuple[Hypothesis, ...]
+    pairs: tuple[Hypothesis, ...]
+
+    @property
+    def excess_ratio(self) -> float:
+        """Baseline held-out cost over the noise's share of it."""
+        return self.baseline_cost / max(self.noise_cost, 1e-18)
+
+    def as_dict(self) -> dict[str, object]:
+        """Plain JSON."""
+        return asdict(self)
+
+    @staticmethod
+    def from_dict(document: dict[str, Any]) -> Summary:
+        """Inverse of :meth:`as_dict`."""
+
+        def hypotheses(items: list[dict[str, Any]]) -> tuple[Hypothesis, ...]:
+            return tuple(
+                Hypothesis(
+                    **{
+                        **item,
+                        "effects": tuple(item["effects"]),
+                        "window_costs": tuple(item["window_costs"]),
+                    }
+                )
+                for item in items
+            )
+
+        return Summary(
+            baseline_cost=float(document["baseline_cost"]),
+            baseline_window_costs=tuple(document["baseline_window_costs"]),
+            baseline_nrmse=float(document["baseline_nrmse"]),
+            noise_cost=float(document["noise_cost"]),
+            singles=hypotheses(document["singles"]),
+            pairs=hypotheses(document["pairs"]),
+        )
+
+
+def summarise(
+    baseline: Fit, singles: list[Fit], pairs: list[Fit], noise_cost: float, evidence: Evidence
+) -> Summary:
+    """The decision's inputs from the fits."""
+
+    def hypothesis(h: Fit) -> Hypothesis:
+        return Hypothesis(
+            effects=h.effects,
+            parameters=len(h.theta) - len(baseline.theta),
+            held_out_cost=h.held_out_cost,
+            window_costs=h.window_costs,
+            plausible=_plausible(h),
+            consistent=all(BY_NAME[e].consistent(evidence.values) for e in h.effects),
+        )
+
+    return Summary(
+        baseline_cost=baseline.held_out_cost,
+        baseline_window_costs=baseline.window_costs,
+        baseline_nrmse=max(baseline.held_out_nrmse.values()),
+        noise_cost=noise_cost,
+        singles=tuple(hypothesis(h) for h in singles),
+        pairs=tuple(hypothesis(h) for h in pairs),
+    )
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The decision: effects named, its confidence, and which hypothesis models them."""
+
+    effects: tuple[str, ...]  # () none, ("unexplained",), or candidate names
+    confidence: float
+    chosen: tuple[str, ...] | None  # effects of the hypothesis kept as improved model
+
+
+def ratio(reference: float, cost: float) -> float:
+    """How many times ``cost`` is below ``reference`` (held-out improvement)."""
+    return reference / max(cost, 1e-18)
+
+
+def decide(summary: Summary) -> Verdict:
+    """Name the effects from the fitted hypotheses' held-out costs (pure; replayable).
+
+    Admissible are the plausible singles, and the plausible pairs that cut the error of the
+    better of their two singles again ``PAIR_RATIO`` times (a second effect must earn its
+    place). The admissible hypothesis of best score (log held-out gain less
+    ``PARAMETER_PENALTY`` per parameter) is the verdict when it cuts the baseline's held-out
+    error ``ACCEPT_RATIO`` times and no held-out window gets worse than ``WINDOW_FLOOR``
+    times the baseline's (a missing physics is missing everywhere; a stand-in for a
+    parameter error helps one segment and hurts another). Otherwise: ``unexplained`` when
+    the baseline's held-out NRMSE exceeds ``UNEXPLAINED_NRMSE``, else none.
+    """
+    base = summary.baseline_cost
+    singles = {h.effects: h for h in summary.singles}
+
+    def gain(h: Hypothesis) -> float:
+        return ratio(base, h.held_out_cost)
+
+    def score(h: Hypothesis) -> float:
+        return math.log(gain(h)) - PARAMETER_PENALTY * h.parameters
+
+    def admissible(h: Hypothesis) -> bool:
+        if not h.plausible:
+            return False
+        if len(h.effects) == 1:
+            return True
+        members = [singles[(e,)] for e in h.effects if (e,) in singles]
+        better = min((m.held_out_cost for m in members), default=base)
+        return (
+            ratio(better, h.held_out_cost) >= PAIR_RATIO
+            and (better - h.held_out_cost) / base >= PAIR_SHARE
+        )
+
+    def holds_everywhere(h: Hypothesis) -> bool:
+        return all(
+            ratio(b, w) >= WINDOW_FLOOR
+            for b, w in zip(summary.baseline_window_costs, h.window_costs)
+        )
+
+    required = CLEAR_ACCEPT_RATIO if summary.excess_ratio >= CLEAR_EXCESS else ACCEPT_RATIO
+    ranked = sorted((h for h in (*summary.singles, *summary.pairs)), key=score, reverse=True)
+    eligible = [h for h in ranked if admissible(h)]
+    chosen = next((h for h in eligible if gain(h) >= required and holds_everywhere(h)), None)
+    log_gains = {h.effects: math.log(gain(h)) for h in ranked}
+    best = max((log_gains[h.effects] for h in eligible), default=0.0)
+    if chosen is not None:
+        own = log_gains[chosen.effects]
+        rivals = [g for effects, g in log_gains.items() if not set(effects) & set(chosen.effects)]
+        margins = [own - max(rivals, default=0.0), own - math.log(required)]
+        if len(chosen.effects) == 1:  # how near a pair with it came to being named instead
+            margins += [
+                max(
+                    math.log(PAIR_RATIO) - (log_gains[p.effects] - own),
+                    math.log(
+                        PAIR_SHARE * base / max(chosen.held_out_cost - p.held_out_cost, 1e-30)
+                    ),
+                )
+                for p in summary.pairs
+                if chosen.effects[0] in p.effects and p.plausible
+            ]
+        else:  # how far the pair clears its better single
+            alone = max(log_gains.get((e,), 0.0) for e in chosen.effects)
+            margins.append(own - alone - math.log(PAIR_RATIO))
+        return Verdict(chosen.effects, _confidence(min(margins)), chosen.effects)
+    unexplained = summary.baseline_nrmse > UNEXPLAINED_NRMSE
+    margin = min(
+        math.log(required) - best,
+        abs(math.log(max(summary.baseline_nrmse, 1e-12) / UNEXPLAINED_NRMSE)),
+    )
+    return Verdict(("unexplained",) if unexplained else (), _confidence(margin), None)
+
+
+def _confidence(margin: float) -> float:
+    """Probability that the verdict is right, from its smallest decision margin (log units).
+
+    ``CONFIDENCE_SLOPE`` and ``CONFIDENCE_OFFSET`` are a logistic regression of right/wrong
+    on the margin over a tuning benchmark (README: the cases, and the set they were checked
+    on afterwards).
+    """
+    return _logistic(CONFIDENCE_SLOPE * margin + CONFIDENCE_OFFSET)
 
 
 def _gain(baseline: Fit, candidate: Fit) -> float:
@@ -267,11 +464,6 @@ def _plausible(fit: Fit) -> bool:
             return False
         column += size
     return True
-
-
-def _shares_physics(names: tuple[str, str]) -> bool:
-    """Pairs that are one physics twice (none among the current candidates)."""
-    return names[0] == names[1]
 
 
 def _explain(baseline: Fit, chosen: Fit, evidence: Evidence) -> str:
@@ -292,30 +484,11 @@ def _explain(baseline: Fit, chosen: Fit, evidence: Evidence) -> str:
     return " ".join(parts)
 
 
-def _confidence(baseline: Fit, ranked: list[Fit], chosen: Fit | None) -> float:
-    """Probability-like confidence from the margins of the decision.
-
-    With effects: how far the winner's log-gain clears both the acceptance ratio and the
-    runner-up. Without: how far the best candidate stays below acceptance, times how far
-    the baseline's held-out NRMSE is from the 'unexplained' threshold (on its side).
-    """
-    gains = [math.log(baseline.held_out_cost / max(f.held_out_cost, 1e-15)) for f in ranked]
-    if chosen is not None:
-        runner_up = next(
-            (g for f, g in zip(ranked, gains) if f.effects[0] != chosen.effects[0]), 0.0
-        )
-        margin = min(gains[0] - runner_up, gains[0] - math.log(ACCEPT_RATIO))
-        return _logistic(CONFIDENCE_SLOPE * margin + CONFIDENCE_OFFSET)
-    below_accept = _logistic(
-        CONFIDENCE_SLOPE * (math.log(ACCEPT_RATIO) - gains[0]) + CONFIDENCE_OFFSET
-    )
-    distance = abs(max(baseline.held_out_nrmse.values()) - UNEXPLAINED_NRMSE)
-    return below_accept * _logistic(distance / UNEXPLAINED_SCALE)
-
-
 def _logistic(x: float) -> float:
     return float(1.0 / (1.0 + math.exp(-x)))
 
 
-CONFIDENCE_SLOPE = 3.0
-CONFIDENCE_OFFSET = 0.5
+CONFIDENCE_SLOPE = 1.0
+CONFIDENCE_OFFSET = 2.0
+"""Logistic regression of right (1) / wrong (0) on the decision margin over 74 tuning cases
+(``brake-hil cases`` seeds 11 and 13; 70 right), ridge 0.01; checked on a fresh seed (README)."""

@@ -52,6 +52,8 @@ STATE_SCALE = {
 # Explicit-input columns of the linear plant.
 RELATIVE_FORCE, CALIPER_FORCE, LINE_DROP = range(3)
 INPUTS = 3
+HOSE_INERTANCE_SHARE = 0.3
+"""Part of the line inertance beyond the hose node (the seed rig's 0.6 m hose of 2.1 m)."""
 STUCK, SLIPPING = 0, 1
 APPLY, RELEASE = 0, 1
 
@@ -70,6 +72,7 @@ class ModelSpec:
     bore_friction: FloatArray | None = None  # N/(Pa m), extra threshold per p_b |x_c|
     orifice_coefficient: FloatArray | None = None  # Pa s^2/m^6, dp = K Q |Q|
     hose_compliance: FloatArray | None = None  # m^3/Pa, node between pipe and hose
+    hose_resistance_share: FloatArray | None = None  # -, part of R beyond the hose node
     share_slope: FloatArray | None = None  # -, share s = s0 + s1 (p_b - p_ref) / p_ref
     air_volume: FloatArray | None = None  # m^3, isothermal air volume at gauge zero
     drift_rate: FloatArray | None = None  # 1/s, relative drift of the line resistance
@@ -121,6 +124,7 @@ def _plant(
     line_resistance: float,
     bore_compliance: float,
     hose_compliance: float | None,
+    hose_resistance_share: float = 0.3,
 ) -> _Plant:
     """Scaled continuous plant of eq. 21c-f with the given piston-caliper coupling."""
     names = ["Q_h", "p_b", "x_p", "v_p", "x_c", "v_c"]
@@ -136,10 +140,10 @@ def _plant(
         A[i["Q_h"], i["p_b"]] = -1.0 / p.line_inertance
         B[i["Q_h"]] = 1.0 / p.line_inertance
         W[i["Q_h"], LINE_DROP] = -1.0 / p.line_inertance
-    else:  # pipe and valve up to the node, the hose (a third of R and I) beyond it
-        hose_share = 0.3
-        r_pipe, r_hose = (1 - hose_share) * line_resistance, hose_share * line_resistance
-        i_pipe, i_hose = (1 - hose_share) * p.line_inertance, hose_share * p.line_inertance
+    else:  # pipe and valve up to the node, the hose beyond it
+        r_share, i_share = hose_resistance_share, HOSE_INERTANCE_SHARE
+        r_pipe, r_hose = (1 - r_share) * line_resistance, r_share * line_resistance
+        i_pipe, i_hose = (1 - i_share) * p.line_inertance, i_share * p.line_inertance
         A[i["Q_p"], i["Q_p"]] = -r_pipe / i_pipe
         A[i["Q_p"], i["p_h"]] = -1.0 / i_pipe
         B[i["Q_p"]] = 1.0 / i_pipe
@@ -237,6 +241,7 @@ def _tables(
                     line_resistance=line_drift * p.line_resistance,
                     bore_compliance=compliance,
                     hose_compliance=hose,
+                    hose_resistance_share=_hose_share(spec, b),
                 )
                 start = start or plant
                 by_mode.append(_discretize(plant, h))
@@ -247,6 +252,11 @@ def _tables(
         np.array([[[m[j] for m in lvl] for lvl in row] for row in entries]) for j in range(4)
     ]
     return _Tables(stacked[0], stacked[1], stacked[2], stacked[3], start)
+
+
+def _hose_share(spec: ModelSpec, b: int) -> float:
+    """Part of the line resistance beyond the hose node (0.3 when the spec leaves it)."""
+    return 0.3 if spec.hose_resistance_share is None else float(spec.hose_resistance_share[b])
 
 
 def _simulate_linear(spec: ModelSpec, u: FloatArray, sample_time: float) -> FloatArray:
@@ -261,6 +271,7 @@ def _simulate_linear(spec: ModelSpec, u: FloatArray, sample_time: float) -> Floa
             line_resistance=p.line_resistance,
             bore_compliance=p.bore_compliance,
             hose_compliance=hose,
+            hose_resistance_share=_hose_share(spec, b),
         )
         phi, g_prev, g_now, _ = _discretize(plant, sample_time)
         model = DiscreteModel(

@@ -17,10 +17,9 @@ import numpy.typing as npt
 import scipy.optimize
 
 from brake_hil.core.diagnosis.calibration import MODEL_ERROR, Calibration, apply_multipliers
-from brake_hil.core.diagnosis.candidates.base import Candidate, Context, Draft
+from brake_hil.core.diagnosis.candidates.base import Candidate, Context, Draft, rig_context
 from brake_hil.core.diagnosis.dataset import Dataset, Window
 from brake_hil.core.diagnosis.engine import ModelSpec, simulate_batch
-from brake_hil.core.parameters import chamber_volumes, seal_properties
 from brake_hil.core.types import FloatArray
 from brake_hil.topics import OUTPUT_CHANNELS
 
@@ -46,6 +45,7 @@ class Fit:
     held_out_cost: float  # the same on the held-out windows
     held_out_nrmse: dict[str, float]  # per channel, held-out windows
     uncertainty: FloatArray | None = None  # one sigma of theta, natural units
+    window_costs: tuple[float, ...] = ()  # held_out_cost of each held-out window alone
 
     def parameters(self) -> dict[str, float]:
         """Fitted parameters by name."""
@@ -171,14 +171,29 @@ class Model:
 
     def channel_nrmse(self, windows: Sequence[Window], theta: FloatArray) -> dict[str, float]:
         """RMS error over peak-to-peak per channel for one parameter vector."""
+        return self.scores(windows, theta)[0]
+
+    def scores(
+        self, windows: Sequence[Window], theta: FloatArray
+    ) -> tuple[dict[str, float], tuple[float, ...]]:
+        """NRMSE per channel over ``windows``, and each window's cost alone.
+
+        A window's cost is the mean over channels of its squared NRMSE (the measure
+        ``Fit.held_out_cost`` takes over all held-out windows).
+        """
         scale = self.dataset.scale()
         errors: dict[str, list[FloatArray]] = {key: [] for key in OUTPUT_CHANNELS}
+        window_costs = []
         for window in windows:
             outputs, index = self.simulate(window, theta[None, :])
+            costs = []
             for channel, key in enumerate(OUTPUT_CHANNELS):
-                residual = outputs[0, channel] - self.dataset.measured[key][index]
-                errors[key].append(residual / scale[key])
-        return {key: float(np.sqrt(np.mean(np.concatenate(v) ** 2))) for key, v in errors.items()}
+                residual = (outputs[0, channel] - self.dataset.measured[key][index]) / scale[key]
+                errors[key].append(residual)
+                costs.append(float(np.mean(residual**2)))
+            window_costs.append(float(np.mean(costs)))
+        nrmse = {key: float(np.sqrt(np.mean(np.concatenate(v) ** 2))) for key, v in errors.items()}
+        return nrmse, tuple(window_costs)
 
 
 def make_context(calibration: Calibration, dataset: Dataset) -> Context:
@@ -193,12 +208,9 @@ def make_context(calibration: Calibration, dataset: Dataset) -> Context:
         params.caliper_stiffness + params.effective_hydraulic_stiffness
     )
     flow = max(2 * np.pi * rig.excitation_hz * volume_per_pascal * bore_amplitude, 1e-9)
-    return Context(
-        seal=seal_properties(rig),
-        bore_volume=chamber_volumes(rig)[1],
+    return rig_context(
+        rig,
         flow_amplitude=flow,
-        transducer_distance=rig.transducer_distance,
-        bore_friction_coefficient=rig.bore_friction_coefficient,
         time_reference=float(np.mean([0.5 * (w.start + w.end) for w in dataset.train])),
     )
 
@@ -267,7 +279,7 @@ def fit(model: Model, start: FloatArray | None = None, max_iterations: int = 15)
     data_part = result.fun[: result.fun.size - sigma.size] * MODEL_ERROR
     train_cost = float(np.sum(data_part**2))
     uncertainty = _uncertainty(model, result.jac, theta, train_cost, data_part.size)
-    nrmse = model.channel_nrmse(ds.held_out, theta)
+    nrmse, window_costs = model.scores(ds.held_out, theta)
     return Fit(
         effects=model.names,
         theta=theta,
@@ -277,6 +289,7 @@ def fit(model: Model, start: FloatArray | None = None, max_iterations: int = 15)
         held_out_cost=float(np.mean([v**2 for v in nrmse.values()])),
         held_out_nrmse=nrmse,
         uncertainty=uncertainty,
+        window_costs=window_costs,
     )
 
 

@@ -19,7 +19,7 @@ import numpy as np
 
 from brake_hil.core.diagnosis.calibration import apply_multipliers
 from brake_hil.core.diagnosis.candidates import BY_NAME
-from brake_hil.core.diagnosis.candidates.base import Context, Draft
+from brake_hil.core.diagnosis.candidates.base import Draft, rig_context
 from brake_hil.core.diagnosis.engine import (
     Integrator,
     ModelSpec,
@@ -27,7 +27,6 @@ from brake_hil.core.diagnosis.engine import (
 )
 from brake_hil.core.lti_model import ModelOutput
 from brake_hil.core.model_file import LiveModel
-from brake_hil.core.parameters import chamber_volumes, seal_properties
 from brake_hil.core.rig import Rig, load_rig
 from brake_hil.core.types import FloatArray
 from brake_hil.errors import BrakeHilError
@@ -74,24 +73,13 @@ class ImprovedModel:
 
     def spec(self, rig: Rig, mean_pressure: float) -> ModelSpec:
         """The simulator spec (one set) of this model at a mean pressure (Pa)."""
-        context = Context(
-            seal=seal_properties(rig),
-            bore_volume=_bore_volume(rig),
-            flow_amplitude=self.flow_amplitude,
-            transducer_distance=rig.transducer_distance,
-            bore_friction_coefficient=rig.bore_friction_coefficient,
-            time_reference=self.time_reference,
-        )
+        context = rig_context(rig, self.flow_amplitude, self.time_reference)
         draft = Draft([apply_multipliers(rig, mean_pressure, self.multipliers)])
         for name in self.effects:
             candidate = BY_NAME[name]
             theta = np.array([[self.parameters[p.name] for p in candidate.parameters]])
             candidate.fill(draft, theta, context)
         return ModelSpec(tuple(draft.params), **draft.fields)  # type: ignore[arg-type]
-
-
-def _bore_volume(rig: Rig) -> float:
-    return chamber_volumes(rig)[1]
 
 
 def read_improved_model(path: Path) -> ImprovedModel:

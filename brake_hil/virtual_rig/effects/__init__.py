@@ -1,6 +1,8 @@
 """The effects the LTI model leaves out, one module each, behind :class:`Effect`.
 
-``EFFECTS`` maps each name of interface.md's effect table to its class. Make one with
+``EFFECTS`` maps each name of interface.md's effect table to its class; ``OUT_OF_LIBRARY``
+the physics no candidate of the diagnosis models (a case with one is labelled
+``unexplained``). Make one with
 :func:`make_effect` (``make_effect("orifice_flow", 0.5)``) or from the command-line form
 ``NAME[=STRENGTH][,PARAM=VALUE...]`` with :func:`parse_effect`.
 """
@@ -19,6 +21,7 @@ from brake_hil.virtual_rig.effects.orifice_flow import OrificeFlow
 from brake_hil.virtual_rig.effects.seal_groove_asymmetry import SealGrooveAsymmetry
 from brake_hil.virtual_rig.effects.seal_stick_slip import SealStickSlip
 from brake_hil.virtual_rig.effects.sensor_delay import SensorDelay
+from brake_hil.virtual_rig.effects.sensor_nonlinearity import SensorNonlinearity
 from brake_hil.virtual_rig.effects.thermal_drift import ThermalDrift
 
 EFFECTS: Mapping[str, type[Effect]] = MappingProxyType(
@@ -39,6 +42,11 @@ EFFECTS: Mapping[str, type[Effect]] = MappingProxyType(
 )
 """Every effect by its interface.md name, in the table's order."""
 
+OUT_OF_LIBRARY: Mapping[str, type[Effect]] = MappingProxyType(
+    {cls.name: cls for cls in (SensorNonlinearity,)}
+)
+"""Physics outside interface.md's effect table: what ``unexplained`` verdicts are tested on."""
+
 
 def make_effect(name: str, strength: float = 1.0, **parameters: float | str) -> Effect:
     """The effect ``name`` at ``strength`` with some parameters changed from their defaults.
@@ -47,9 +55,9 @@ def make_effect(name: str, strength: float = 1.0, **parameters: float | str) -> 
         EffectError: an unknown effect or parameter, or a value outside its bounds.
     """
     try:
-        cls = EFFECTS[name]
+        cls = {**EFFECTS, **OUT_OF_LIBRARY}[name]
     except KeyError:
-        known = ", ".join(EFFECTS)
+        known = ", ".join([*EFFECTS, *OUT_OF_LIBRARY])
         raise EffectError(f"unknown effect {name!r} (known: {known})") from None
     known_parameters = {p.name for p in cls.parameters} - {"strength"}
     if unknown := sorted(set(parameters) - known_parameters):
@@ -91,6 +99,7 @@ def _number_or_text(value: str) -> float | str:
 
 __all__ = [
     "EFFECTS",
+    "OUT_OF_LIBRARY",
     "STRENGTH",
     "BoreFriction",
     "EccentricLoad",
@@ -103,6 +112,7 @@ __all__ = [
     "SealGrooveAsymmetry",
     "SealStickSlip",
     "SensorDelay",
+    "SensorNonlinearity",
     "ThermalDrift",
     "make_effect",
     "parse_effect",

@@ -19,7 +19,14 @@ from typing import ClassVar, NamedTuple
 
 import numpy as np
 
-from brake_hil.core.parameters import ModelParameters, SealProperties
+from brake_hil.core.parameters import (
+    ModelParameters,
+    SealProperties,
+    chamber_volumes,
+    line_resistance,
+    seal_properties,
+)
+from brake_hil.core.rig import Rig
 from brake_hil.core.types import FloatArray
 
 
@@ -44,6 +51,27 @@ class Context:
     transducer_distance: float  # l_c, m
     bore_friction_coefficient: float  # nominal mu_fb
     time_reference: float  # s, middle of the training data (where drifts are zero)
+    hose_resistance_share: float = 0.3  # -, R_t / (R_r + R_v + R_t): the hose's part of R
+
+
+def rig_context(rig: Rig, flow_amplitude: float, time_reference: float) -> Context:
+    """The Context of a rig (seed eqs. 2-3, 13, 20) for a model's flow and time reference."""
+    viscosity = rig.fluid.viscosity
+    hose = line_resistance(rig.hose, viscosity)
+    total = (
+        line_resistance(rig.hard_pipe, viscosity)
+        + rig.model_overrides.get("R_v", rig.needle_valve_resistance)
+        + hose
+    )
+    return Context(
+        seal=seal_properties(rig),
+        bore_volume=chamber_volumes(rig)[1],
+        flow_amplitude=flow_amplitude,
+        transducer_distance=rig.transducer_distance,
+        bore_friction_coefficient=rig.bore_friction_coefficient,
+        time_reference=time_reference,
+        hose_resistance_share=hose / total,
+    )
 
 
 @dataclass

@@ -19,8 +19,9 @@ class HoseCompliance(Candidate):
     The seed folds the pipe's and hose's wall compliance into the bore's effective bulk
     modulus (eq. 18) and neglects it in the flow equation (eq. 21c). A braided hose's
     swelling is a compliance of its own between the valve and the bore: one lumped node of
-    compliance ``C_h`` that splits the line into an upstream (pipe and valve, 70 % of R and I)
-    and a downstream (hose) part (Merritt 1967, ch. 4, lumped transmission line).
+    compliance ``C_h`` that splits the line into an upstream part (pipe and valve: their
+    resistance, eq. 13, and 70 % of the inertance) and a downstream one (the hose's own
+    resistance ``R_t`` and the rest) (Merritt 1967, ch. 4, lumped transmission line).
     """
 
     name = "hose_compliance"
@@ -33,6 +34,8 @@ class HoseCompliance(Candidate):
         """A hose node whose compliance is a multiple of the bore's."""
         compliance = np.array([p.bore_compliance for p in draft.params])
         draft.add("hose_compliance", theta[:, 0] * compliance)
+        share = np.full(len(draft.params), context.hose_resistance_share)
+        draft.add("hose_resistance_share", share)
 
     def consistent(self, evidence: dict[str, float]) -> bool:
         """The bore pressure is mispredicted."""
