@@ -48,6 +48,10 @@ def _model(effects: tuple[str, ...], parameters: dict[str, float]) -> ImprovedMo
             {"air_share": 0.01, "delay_p_b": 0.0, "delay_F_k": 0.002, "delay_x_c": 0.0035},
         ),
         (
+            ("hose_compliance", "orifice_flow"),
+            {"hose_compliance_ratio": 2.0, "turbulent_share": 0.5},
+        ),
+        (
             ("seal_groove_asymmetry", "thermal_drift"),
             {
                 "stiffness_asymmetry": 0.3,
