@@ -239,6 +239,23 @@ def plan_cases(
     return specs
 
 
+def select_cases(
+    count: int, seed: int, kinds: Sequence[str] = (), *, error_scale: float = 1.0
+) -> list[CaseSpec]:
+    """The first ``count`` cases of the schedule whose kind is one of ``kinds`` (all: empty).
+
+    A kept case is the very case of that number in the full schedule.
+    """
+    planned = count
+    specs = plan_cases(planned, seed, error_scale=error_scale)
+    if not kinds:
+        return specs
+    while sum(spec.kind in kinds for spec in specs) < count:
+        planned *= 2
+        specs = plan_cases(planned, seed, error_scale=error_scale)
+    return [spec for spec in specs if spec.kind in kinds][:count]
+
+
 def case_excitation(spec: CaseSpec, truth: Rig, pulsing_s: float) -> Excitation:
     """The seed's three segments (1.38, 2.07, 2.76 MPa), solenoid-driven or as ``p_i``."""
     if spec.air_driven:
@@ -296,6 +313,7 @@ def generate_cases(
     pulsing_s: float = 5.0,
     jobs: int = 1,
     error_scale: float = 1.0,
+    kinds: Sequence[str] = (),
     progress: Callable[[str], None] | None = None,
 ) -> Path:
     """Write ``count`` labelled cases under ``out``; return the path of ``labels.json``.
@@ -308,6 +326,8 @@ def generate_cases(
         pulsing_s: seconds of 5 Hz pulsing per maximum pressure (5 s: 18 s recordings).
         jobs: worker processes (the machine's cores, at most).
         error_scale: multiplies the one-sigma tolerances the parameter errors are drawn from.
+        kinds: keep only cases of these kinds (null, single, pair, unexplained), numbered as
+            in the full schedule; ``count`` is then the number kept.
         progress: called with each finished case's id.
 
     Raises:
@@ -318,7 +338,7 @@ def generate_cases(
         raise FileExistsError(f"{out}: not empty; choose a new directory for the cases")
     cases_dir = out / "cases"
     cases_dir.mkdir(parents=True, exist_ok=True)
-    specs = plan_cases(count, seed, error_scale=error_scale)
+    specs = select_cases(count, seed, kinds, error_scale=error_scale)
     labels: dict[str, Any] = {}
     work = [(spec, cases_dir, pulsing_s) for spec in specs]
     if jobs > 1:
@@ -340,6 +360,7 @@ def generate_cases(
             "seed": seed,
             "pulsing_s": pulsing_s,
             "error_scale": error_scale,
+            "kinds": list(kinds),
             "layout": "cases/NNN/recording (rosbag2 MCAP) + cases/NNN/rig.yaml (nominal)",
         },
         "cases": dict(sorted(labels.items())),

@@ -154,7 +154,7 @@ def add_cases_parser(commands: argparse._SubParsersAction) -> None:  # type: ign
         "cases", help="write labelled virtual-rig cases for scoring a diagnosis blind"
     )
     cases.add_argument("--out", type=Path, required=True, help="new directory")
-    cases.add_argument("--count", type=int, default=24, help="number of cases (24: one round)")
+    cases.add_argument("--count", type=int, default=26, help="number of cases (26: one round)")
     cases.add_argument("--seed", type=int, default=0)
     cases.add_argument(
         "--pulsing-seconds", type=float, default=5.0, help="per pressure segment (5: 18 s)"
@@ -162,6 +162,13 @@ def add_cases_parser(commands: argparse._SubParsersAction) -> None:  # type: ign
     cases.add_argument("--jobs", type=int, default=1, help="worker processes")
     cases.add_argument(
         "--error-scale", type=float, default=1.0, help="scales the rig tolerances (1 sigma)"
+    )
+    cases.add_argument(
+        "--kind",
+        action="append",
+        choices=("null", "single", "pair", "unexplained"),
+        default=[],
+        help="keep only cases of this kind (repeatable; default: every kind)",
     )
 
 
@@ -180,6 +187,7 @@ def run_cases(args: argparse.Namespace) -> Path:
             pulsing_s=args.pulsing_seconds,
             jobs=args.jobs,
             error_scale=args.error_scale,
+            kinds=tuple(args.kind),
             progress=lambda _case: bar.update(1),
         )
     finally:

@@ -19,6 +19,7 @@ from brake_hil.virtual_rig.cases import (
     label,
     nominal_rigs,
     plan_cases,
+    select_cases,
     truth_rig,
 )
 from brake_hil.virtual_rig.effects import OUT_OF_LIBRARY
@@ -102,3 +103,11 @@ def test_an_out_of_library_case_is_labelled_unexplained() -> None:
     document = label(spec, truth, case_excitation(spec, truth, 1.0))
     assert document["expected_effects"] == ["unexplained"]
     assert document["effects"][0]["name"] == "sensor_nonlinearity"
+
+
+def test_a_selection_by_kind_keeps_the_cases_of_the_full_schedule() -> None:
+    nulls = select_cases(5, seed=3, kinds=("null",))
+    assert len(nulls) == 5 and all(s.kind == "null" and not s.effects for s in nulls)
+    full = {s.number: s for s in plan_cases(max(s.number for s in nulls) + 1, seed=3)}
+    assert all(full[s.number] == s for s in nulls)
+    assert select_cases(4, seed=3) == plan_cases(4, seed=3)

@@ -41,6 +41,11 @@ CLEAR_EXCESS = 10.0
 """... or ``CLEAR_ACCEPT_RATIO`` when the baseline's held-out error is this many times the
 measurement noise's share of it (a misfit that is clearly more than noise)."""
 CLEAR_ACCEPT_RATIO = 1.5
+NOISE_EXCESS = 8.0
+"""No effect is named while the baseline's held-out error is under this many times the noise's
+share of it: what is left is within a few noise variances, and a candidate that halves it is
+fitting the residue of a parameter error (measured: nulls 2-6x, the weakest real effects
+10x and more)."""
 PAIR_RATIO = 1.8
 """A second effect must cut it again at least this much ..."""
 PAIR_SHARE = 0.03
@@ -377,7 +382,8 @@ def decide(summary: Summary) -> Verdict:
     error ``ACCEPT_RATIO`` times and no held-out window gets worse than ``WINDOW_FLOOR``
     times the baseline's (a missing physics is missing everywhere; a stand-in for a
     parameter error helps one segment and hurts another). Otherwise: ``unexplained`` when
-    the baseline's held-out NRMSE exceeds ``UNEXPLAINED_NRMSE``, else none.
+    the baseline's held-out NRMSE exceeds ``UNEXPLAINED_NRMSE``, else none. Nothing is
+    named while the baseline is within ``NOISE_EXCESS`` times the noise's share.
     """
     base = summary.baseline_cost
     singles = {h.effects: h for h in summary.singles}
@@ -407,6 +413,9 @@ def decide(summary: Summary) -> Verdict:
         )
 
     required = CLEAR_ACCEPT_RATIO if summary.excess_ratio >= CLEAR_EXCESS else ACCEPT_RATIO
+    if summary.excess_ratio < NOISE_EXCESS:
+        margin = math.log(NOISE_EXCESS / max(summary.excess_ratio, 1e-9))
+        return Verdict((), _confidence(margin), None)
     ranked = sorted((h for h in (*summary.singles, *summary.pairs)), key=score, reverse=True)
     eligible = [h for h in ranked if admissible(h)]
     chosen = next((h for h in eligible if gain(h) >= required and holds_everywhere(h)), None)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
@@ -67,6 +68,17 @@ def test_a_fit_that_hurts_one_held_out_window_is_refused(monkeypatch: pytest.Mon
     assert decide(summary(patchy)).effects == ()
     monkeypatch.setattr(diagnosis, "WINDOW_FLOOR", 0.5)
     assert decide(summary(patchy)).effects == ("sensor_delay",)
+
+
+def test_nothing_is_named_while_the_misfit_is_within_a_few_noise_variances() -> None:
+    near_noise = dataclasses.replace(
+        summary(single("hose_compliance", BASE / 4)), noise_cost=BASE / 5
+    )
+    verdict = decide(near_noise)
+    assert verdict.effects == () and verdict.chosen is None
+    assert decide(dataclasses.replace(near_noise, noise_cost=BASE / 50)).effects == (
+        "hose_compliance",
+    )
 
 
 def test_implausible_fits_are_never_named() -> None:
