@@ -4,9 +4,11 @@ The rig file is nominal; the seed identifies its uncertain parameters from data.
 uncertain ones are fitted by least squares on the training windows, each as a log-multiplier
 of its nominal value with a Gaussian prior of the rig's one-sigma tolerance (interface.md):
 caliper stiffness ``k_c``, needle-valve resistance ``R_v``, the seal's ``k_eh`` and ``c_eh``,
-and the fluid's air fraction (eq. 18: it sets ``C_b`` and ``C_i`` at every pressure, so an
+the fluid's air fraction (eq. 18: it sets ``C_b`` and ``C_i`` at every pressure, so an
 error in it changes the compliance more at low pressure than at high, which one multiplier of
-``C_b`` cannot follow; a rig file that overrides ``C_b`` gets a ``C_b`` multiplier instead).
+``C_b`` cannot follow; a rig file that overrides ``C_b`` gets a ``C_b`` multiplier instead),
+and the hose wall's Young's modulus (its swelling is the part of ``C_b`` that does not change
+with pressure; left out, a 10 % error in it was named hose_compliance on null recordings).
 So a parameter error is not mistaken for missing physics, and a mismatch that would need a
 value far outside its tolerance is left for the candidates to explain.
 
@@ -51,10 +53,11 @@ UNCERTAIN = (
     Uncertain("effective_hydraulic_stiffness", "seal.shear_length", 0.5),
     Uncertain("effective_hydraulic_damping", "seal.loss_factor", 0.5),
     Uncertain("air_fraction", "fluid.air_fraction", 0.3),
+    Uncertain("hose_stiffness", "hose.youngs_modulus", 0.0),
 )
 BORE_COMPLIANCE = Uncertain("bore_compliance", "fluid.air_fraction", 0.3)
 """Replaces ``air_fraction`` when the rig file overrides ``C_b``."""
-RIG_VALUES = ("valve_resistance", "air_fraction")
+RIG_VALUES = ("valve_resistance", "air_fraction", "hose_stiffness")
 """Multipliers of rig values (the rest multiply ModelParameters fields)."""
 
 
@@ -89,6 +92,9 @@ def apply_multipliers(rig: Rig, mean_pressure: float, m: dict[str, float]) -> Mo
     if "air_fraction" in m:
         fluid = replace(rig.fluid, air_fraction=rig.fluid.air_fraction * m["air_fraction"])
         rig = replace(rig, fluid=fluid)
+    if "hose_stiffness" in m:
+        hose = replace(rig.hose, youngs_modulus=rig.hose.youngs_modulus * m["hose_stiffness"])
+        rig = replace(rig, hose=hose)
     nominal = derive_parameters(rig, mean_pressure)
     changes = {
         name: getattr(nominal, name) * value for name, value in m.items() if name not in RIG_VALUES

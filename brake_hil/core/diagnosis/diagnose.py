@@ -220,8 +220,14 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         else:
             explanation = (
                 f"The calibrated LTI model explains the recording: held-out NRMSE at most "
-                f"{100 * baseline_nrmse:.2f} %, and no candidate cuts the error "
-                f"{ACCEPT_RATIO:g} times."
+                f"{100 * baseline_nrmse:.2f} %, {summary.excess_ratio:.1f} times the "
+                f"measurement noise's share of the error"
+                + (
+                    f" (under {NOISE_EXCESS:g}: nothing left to name)."
+                    if summary.excess_ratio < NOISE_EXCESS
+                    else f"; the best candidate, {best.effects[0]}, cuts the error only "
+                    f"{_gain(baseline, best):.2f} times."
+                )
             )
     else:
         improved = chosen
