@@ -27,7 +27,9 @@ CASES = {  # case -> (effect, strength, caliper stiffness error, valve error)
     "b": ("sensor_delay", 1.0, 0.9, 1.1),
     "c": ("eccentric_load", 1.0, 1.05, 1.2),
     "d": ("entrained_air", 1.0, 0.95, 0.9),
+    "e": ("sensor_nonlinearity", 1.0, 1.05, 0.9),  # out of the library: "unexplained"
 }
+OUT_OF_LIBRARY = {"sensor_nonlinearity"}
 
 
 @pytest.fixture(scope="module")
@@ -48,7 +50,8 @@ def case_set(tmp_path_factory: pytest.TempPathFactory, default_rig: Rig) -> Path
         folder.mkdir(parents=True)
         save_recording(folder / "recording", run.as_recording())
         shutil.copy(CONFIG / "rig_default.yaml", folder / "rig.yaml")
-        labels[case] = {"effects": [] if effect is None else [effect]}
+        expected = [] if effect is None else [effect]
+        labels[case] = {"effects": ["unexplained"] if effect in OUT_OF_LIBRARY else expected}
     (root / "labels.json").write_text(json.dumps(labels))
     return root
 
@@ -61,4 +64,5 @@ def test_blind_diagnosis_names_each_effect_and_passes_the_null(case_set: Path) -
     assert by_case["a"].effects == ()
     assert figures["false_positive_rate_null"] == 0.0
     assert figures["top1_accuracy_single"] == 1.0, figures["per_case"]
+    assert figures["unexplained_recall"] == 1.0, figures["per_case"]
     assert figures["held_out_nrmse_improvement_median"] > 2.0
