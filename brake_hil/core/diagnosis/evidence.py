@@ -116,6 +116,14 @@ def collect(
         + ", ".join(f"{k} {100 * v:.2f} %" for k, v in nrmse.items())
         + (f"; mismatched: {', '.join(channels)}" if channels else "; no channel above 1 %")
     )
+    noise = ds.noise_cost()
+    misfit = float(np.mean([v**2 for v in nrmse.values()]))
+    values["noise_nrmse"] = float(np.sqrt(noise))
+    values["misfit_over_noise"] = misfit / max(noise, 1e-18)
+    findings.append(
+        f"measurement noise (cycle-to-cycle): {100 * np.sqrt(noise):.3f} % of peak-to-peak; the "
+        f"baseline's squared error is {values['misfit_over_noise']:.1f} times the noise's"
+    )
 
     # Per segment, and where in time.
     windows: list[tuple[float, float]] = []
