@@ -15,7 +15,7 @@ file the test engineer wrote.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 import math
 from pathlib import Path
 from typing import Any
@@ -291,6 +291,7 @@ class Hypothesis:
     window_costs: tuple[float, ...]  # the same per held-out window
     plausible: bool  # fitted parameters describe the physics (Candidate.plausible)
     consistent: bool  # the evidence shows its signature (Candidate.consistent)
+    channel_nrmse: dict[str, float] = field(default_factory=dict)  # held-out, per channel
 
 
 @dataclass(frozen=True)
@@ -303,6 +304,7 @@ class Summary:
     noise_cost: float  # the measurement noise's share of any held-out cost
     singles: tuple[Hypothesis, ...]
     pairs: tuple[Hypothesis, ...]
+    baseline_channel_nrmse: dict[str, float] = field(default_factory=dict)  # held-out
 
     @property
     def excess_ratio(self) -> float:
@@ -336,6 +338,7 @@ class Summary:
             noise_cost=float(document["noise_cost"]),
             singles=hypotheses(document["singles"]),
             pairs=hypotheses(document["pairs"]),
+            baseline_channel_nrmse=dict(document.get("baseline_channel_nrmse", {})),
         )
 
 
@@ -352,6 +355,7 @@ def summarise(
             window_costs=h.window_costs,
             plausible=_plausible(h),
             consistent=all(BY_NAME[e].consistent(evidence.values) for e in h.effects),
+            channel_nrmse=dict(h.held_out_nrmse),
         )
 
     return Summary(
@@ -361,6 +365,7 @@ def summarise(
         noise_cost=noise_cost,
         singles=tuple(hypothesis(h) for h in singles),
         pairs=tuple(hypothesis(h) for h in pairs),
+        baseline_channel_nrmse=dict(baseline.held_out_nrmse),
     )
 
 

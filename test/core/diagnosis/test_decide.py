@@ -89,7 +89,13 @@ def test_implausible_fits_are_never_named() -> None:
 
 
 def test_the_summary_replays_through_json() -> None:
-    original = summary(single("orifice_flow", BASE / 50), pair("orifice_flow", "x", BASE / 60))
+    orifice = dataclasses.replace(
+        single("orifice_flow", BASE / 50), channel_nrmse={"p_b": 1e-3, "F_k": 2e-4, "x_c": 3e-4}
+    )
+    original = dataclasses.replace(
+        summary(orifice, pair("orifice_flow", "x", BASE / 60)),
+        baseline_channel_nrmse={"p_b": 7e-3, "F_k": 1e-3, "x_c": 2e-3},
+    )
     again = Summary.from_dict(json.loads(json.dumps(original.as_dict())))
     assert again == original
     assert decide(again) == decide(original)
