@@ -45,6 +45,10 @@ PREDICTED_OUTPUTS = (
 )
 """The model's predictions of the same quantities, same order."""
 ALL_TOPICS = (MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS, AIR_PRESSURE, *PREDICTED_OUTPUTS)
+QUANTITY_TOPICS: dict[str, TopicSpec] = {
+    spec.quantity: spec for spec in (MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS, AIR_PRESSURE)
+}
+"""The measured topic of each quantity (``p_i``, ``p_b``, ``F_k``, ``x_c``, ``p_a``)."""
 
 OUTPUT_CHANNELS = ("p_b", "F_k", "x_c")
 """Channel keys used in metrics and JSON."""

@@ -83,21 +83,11 @@ from brake_hil.topics import (
     BORE_PRESSURE,
     CALIPER_DISPLACEMENT,
     MASTER_CYLINDER_PRESSURE,
+    QUANTITY_TOPICS,
     TopicSpec,
 )
 
 NAME = "pressure_source"
-QUANTITY_TOPICS: dict[str, TopicSpec] = {
-    spec.quantity: spec
-    for spec in (
-        MASTER_CYLINDER_PRESSURE,
-        BORE_PRESSURE,
-        BLOCK_FORCE,
-        CALIPER_DISPLACEMENT,
-        AIR_PRESSURE,
-    )
-}
-"""The topic of each quantity a source may carry."""
 
 
 def replay_channels(recording: Recording, publish_measured: bool) -> dict[TopicSpec, Any]:

@@ -54,24 +54,10 @@ from brake_hil.core.rig import Rig, load_rig
 from brake_hil.core.types import FloatArray
 from brake_hil.errors import BrakeHilError
 from brake_hil.nodes import common
-from brake_hil.topics import (
-    AIR_PRESSURE,
-    BLOCK_FORCE,
-    BORE_PRESSURE,
-    CALIPER_DISPLACEMENT,
-    MASTER_CYLINDER_PRESSURE,
-    TopicSpec,
-)
+from brake_hil.topics import QUANTITY_TOPICS
 
 NAME = "rig_emulator"
 SAMPLE_PERIOD_NS = 1_000_000
-QUANTITY_TOPICS: dict[str, TopicSpec] = {
-    "p_i": MASTER_CYLINDER_PRESSURE,
-    "p_b": BORE_PRESSURE,
-    "F_k": BLOCK_FORCE,
-    "x_c": CALIPER_DISPLACEMENT,
-    "p_a": AIR_PRESSURE,
-}
 
 
 _COUNTERS = ("ticks", "late_ticks", "overruns", "ticks_skipped")

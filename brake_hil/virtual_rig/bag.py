@@ -12,25 +12,9 @@ from pathlib import Path
 
 from brake_hil.core.rig import Rig
 from brake_hil.io.recording_writer import DEFAULT_START_STAMP_NS, write_recording
-from brake_hil.topics import (
-    AIR_PRESSURE,
-    BLOCK_FORCE,
-    BORE_PRESSURE,
-    CALIPER_DISPLACEMENT,
-    MASTER_CYLINDER_PRESSURE,
-    TopicSpec,
-)
+from brake_hil.topics import QUANTITY_TOPICS
 from brake_hil.virtual_rig.rig_yaml import write_rig
 from brake_hil.virtual_rig.simulator import RigRun
-
-CHANNEL_TOPICS: dict[str, TopicSpec] = {
-    "p_i": MASTER_CYLINDER_PRESSURE,
-    "p_b": BORE_PRESSURE,
-    "F_k": BLOCK_FORCE,
-    "x_c": CALIPER_DISPLACEMENT,
-    "p_a": AIR_PRESSURE,
-}
-"""The contract topic of each measured channel."""
 
 
 def write_run(
@@ -57,7 +41,7 @@ def write_run(
         FileExistsError: ``path`` exists.
     """
     path = Path(path)
-    channels = {CHANNEL_TOPICS[key]: values for key, values in run.measured.items()}
+    channels = {QUANTITY_TOPICS[key]: values for key, values in run.measured.items()}
     write_recording(path, run.time, channels, start_stamp_ns=start_stamp_ns)
     if nominal_rig is not None:
         target = (

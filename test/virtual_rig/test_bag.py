@@ -12,8 +12,9 @@ import pytest
 from brake_hil.core.rig import Rig, load_rig
 from brake_hil.io.recording_reader import read_recording
 from brake_hil.io.recording_writer import DEFAULT_START_STAMP_NS
+from brake_hil.topics import QUANTITY_TOPICS
 from brake_hil.virtual_rig import simulate_rig, solenoid_pulsing
-from brake_hil.virtual_rig.bag import CHANNEL_TOPICS, write_run
+from brake_hil.virtual_rig.bag import write_run
 from brake_hil.virtual_rig.rig_yaml import dump_rig, rig_to_mapping, rig_with_values, write_rig
 from test.virtual_rig.conftest import RunFactory
 
@@ -35,7 +36,7 @@ def test_recording_reads_back_with_mcap_ros2_sample_for_sample(
     assert (path / "metadata.yaml").is_file() and len(files) == 1
     stamps: dict[str, list[int]] = {}
     values: dict[str, list[float]] = {}
-    by_topic = {spec.name: (key, spec) for key, spec in CHANNEL_TOPICS.items()}
+    by_topic = {spec.name: (key, spec) for key, spec in QUANTITY_TOPICS.items()}
     with files[0].open("rb") as stream:
         reader = make_reader(stream, validate_crcs=True, decoder_factories=[DecoderFactory()])
         assert reader.get_header().profile == "ros2"

@@ -118,9 +118,7 @@ class Diagnosis:
                 {
                     "effect": "+".join(h.effects),
                     "score": round(_score(self.baseline, h), 4),
-                    "held_out_improvement": round(
-                        self.baseline.held_out_cost / max(h.held_out_cost, 1e-15), 3
-                    ),
+                    "held_out_improvement": round(_gain(self.baseline, h), 3),
                     "held_out_nrmse": h.held_out_nrmse,
                     "parameters": h.parameters(),
                     "units": dict(zip(h.parameter_names, h.parameter_units)),
@@ -153,8 +151,7 @@ class Diagnosis:
 
 def _score(baseline: Fit, candidate: Fit) -> float:
     """Log held-out improvement less a charge per parameter."""
-    ratio = baseline.held_out_cost / max(candidate.held_out_cost, 1e-15)
-    return math.log(ratio) - PARAMETER_PENALTY * candidate.theta.size
+    return math.log(_gain(baseline, candidate)) - PARAMETER_PENALTY * candidate.theta.size
 
 
 def held_out_metrics(model: Model, theta: np.ndarray) -> dict[str, dict[str, float]]:
@@ -423,11 +420,11 @@ def decide(summary: Summary) -> Verdict:
             for b, w in zip(summary.baseline_window_costs, h.window_costs)
         )
 
-    required = CLEAR_ACCEPT_RATIO if summary.excess_ratio >= CLEAR_EXCESS else ACCEPT_RATIO
     if summary.excess_ratio < NOISE_EXCESS:
         margin = math.log(NOISE_EXCESS / max(summary.excess_ratio, 1e-9))
         return Verdict((), _confidence(margin), None)
-    ranked = sorted((h for h in (*summary.singles, *summary.pairs)), key=score, reverse=True)
+    required = CLEAR_ACCEPT_RATIO if summary.excess_ratio >= CLEAR_EXCESS else ACCEPT_RATIO
+    ranked = sorted((*summary.singles, *summary.pairs), key=score, reverse=True)
     eligible = [h for h in ranked if admissible(h)]
     chosen = next((h for h in eligible if gain(h) >= required and holds_everywhere(h)), None)
     log_gains = {h.effects: math.log(gain(h)) for h in ranked}
@@ -471,7 +468,7 @@ def _confidence(margin: float) -> float:
 
 def _gain(baseline: Fit, candidate: Fit) -> float:
     """Held-out improvement of the mean squared error over the baseline."""
-    return baseline.held_out_cost / max(candidate.held_out_cost, 1e-15)
+    return ratio(baseline.held_out_cost, candidate.held_out_cost)
 
 
 def _plausible(fit: Fit) -> bool:
@@ -487,11 +484,11 @@ def _plausible(fit: Fit) -> bool:
 
 
 def _explain(baseline: Fit, chosen: Fit, evidence: Evidence) -> str:
-    ratio = baseline.held_out_cost / max(chosen.held_out_cost, 1e-15)
+    gain = _gain(baseline, chosen)
     worst = max(baseline.held_out_nrmse, key=lambda k: baseline.held_out_nrmse[k])
     parts = [
         f"{' and '.join(chosen.effects)}: the held-out mean squared error falls "
-        f"{ratio:.1f} times ({worst} NRMSE {100 * baseline.held_out_nrmse[worst]:.2f} % -> "
+        f"{gain:.1f} times ({worst} NRMSE {100 * baseline.held_out_nrmse[worst]:.2f} % -> "
         f"{100 * chosen.held_out_nrmse[worst]:.2f} %)."
     ]
     for name in chosen.effects:

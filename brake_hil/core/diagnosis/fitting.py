@@ -169,10 +169,6 @@ class Model:
                 )
         return np.concatenate(parts, axis=1)
 
-    def channel_nrmse(self, windows: Sequence[Window], theta: FloatArray) -> dict[str, float]:
-        """RMS error over peak-to-peak per channel for one parameter vector."""
-        return self.scores(windows, theta)[0]
-
     def scores(
         self, windows: Sequence[Window], theta: FloatArray
     ) -> tuple[dict[str, float], tuple[float, ...]]:

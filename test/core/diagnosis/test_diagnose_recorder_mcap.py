@@ -18,7 +18,7 @@ import numpy as np
 from brake_hil.core.rig import load_rig
 from brake_hil.io.mcap_recorder import McapRecorder
 from brake_hil.io.stamped_cdr import encode_stamped
-from brake_hil.topics import MASTER_CYLINDER_PRESSURE, MEASURED_OUTPUTS, PREDICTED_OUTPUTS
+from brake_hil.topics import OUTPUT_CHANNELS, PREDICTED_OUTPUTS, QUANTITY_TOPICS
 from brake_hil.virtual_rig.effects import make_effect
 from brake_hil.virtual_rig.excitation import seed_pulsing
 from brake_hil.virtual_rig.simulator import simulate_rig
@@ -36,12 +36,8 @@ def test_diagnose_names_the_effect_in_a_split_recorder_mcap(tmp_path: Path) -> N
         seed=3,
     )
     stamps = T0 + np.round(run.time * 1e9).astype(np.int64)
-    channels = dict(
-        zip(("p_i", "p_b", "F_k", "x_c"), (MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS))
-    )
-    topics = [(spec, run.measured[key]) for key, spec in channels.items()] + [
-        (spec, run.measured[key] * 1.01)
-        for spec, key in zip(PREDICTED_OUTPUTS, ("p_b", "F_k", "x_c"))
+    topics = [(QUANTITY_TOPICS[key], values) for key, values in run.measured.items()] + [
+        (spec, run.measured[key] * 1.01) for spec, key in zip(PREDICTED_OUTPUTS, OUTPUT_CHANNELS)
     ]
     bag = tmp_path / "recorded"
     with McapRecorder(bag, max_file_duration_s=4.0, chunk_bytes=1 << 16) as recorder:
