@@ -50,8 +50,8 @@ import numpy as np
 import scipy
 from scipy.integrate import solve_ivp
 
-from brake_hil.core.excitation import SEED_MAX_PRESSURES, pulsing_profile
-from brake_hil.core.lti_model import (
+from brake_hil.physics.excitation import SEED_MAX_PRESSURES, pulsing_profile
+from brake_hil.physics.lti_model import (
     SAMPLE_TIME,
     CaliperStepper,
     DiscreteModel,
@@ -61,9 +61,9 @@ from brake_hil.core.lti_model import (
     discretize,
     simulate,
 )
-from brake_hil.core.parameters import derive_parameters
-from brake_hil.core.rig import load_rig
-from brake_hil.core.types import FloatArray
+from brake_hil.physics.parameters import derive_parameters
+from brake_hil.physics.rig import load_rig
+from brake_hil.types import FloatArray
 
 REPOSITORY = Path(__file__).resolve().parents[1]
 DEFAULT_RIG = REPOSITORY / "config" / "rig_default.yaml"

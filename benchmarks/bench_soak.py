@@ -45,7 +45,6 @@ from typing import Any
 PROJECT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(PROJECT))
 
-from brake_hil.core.realtime import Histogram  # noqa: E402
 from brake_hil.nodes.chain import (  # noqa: E402
     NodeProcess,
     choose_domain_id,
@@ -54,6 +53,7 @@ from brake_hil.nodes.chain import (  # noqa: E402
     start_node,
     stop_node,
 )
+from brake_hil.runtime import Histogram  # noqa: E402
 from brake_hil.topics import (  # noqa: E402
     MASTER_CYLINDER_PRESSURE,
     MEASURED_OUTPUTS,
@@ -179,7 +179,7 @@ def _start_role(
 ) -> NodeProcess:
     import subprocess
 
-    from brake_hil.core.realtime import set_realtime_priority
+    from brake_hil.runtime import set_realtime_priority
 
     logs.mkdir(parents=True, exist_ok=True)
     log = logs / f"{role}.log"

@@ -20,7 +20,7 @@ import time
 
 import numpy as np
 
-from brake_hil.core.rig import load_rig
+from brake_hil.physics.rig import load_rig
 from brake_hil.virtual_rig import (
     EFFECTS,
     make_effect,

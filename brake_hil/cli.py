@@ -16,16 +16,16 @@ from typing import Any
 
 import numpy as np
 
-from brake_hil.core.characterization import characterize
-from brake_hil.core.comparison import compare, predict
-from brake_hil.core.excitation import pulsing_profile
-from brake_hil.core.measurement import SENSORS, measure
-from brake_hil.core.parameters import derive_parameters
-from brake_hil.core.regression import run_regression
-from brake_hil.core.rig import load_rig
+from brake_hil.analysis.characterization import characterize
+from brake_hil.analysis.comparison import compare, predict
+from brake_hil.app.regress import run_regression
 from brake_hil.errors import BrakeHilError
 from brake_hil.io.recording_reader import read_recording
 from brake_hil.io.recording_writer import write_recording
+from brake_hil.physics.excitation import pulsing_profile
+from brake_hil.physics.measurement import SENSORS, measure
+from brake_hil.physics.parameters import derive_parameters
+from brake_hil.physics.rig import load_rig
 from brake_hil.topics import (
     BLOCK_FORCE,
     BORE_PRESSURE,
@@ -126,7 +126,7 @@ def run_diagnose(recording_path: Path, rig_path: Path, out: Path) -> dict[str, o
     """``brake-hil diagnose``: find, name and model the physics the LTI model left out."""
     from tqdm import tqdm
 
-    from brake_hil.core.diagnosis.diagnose import diagnose
+    from brake_hil.diagnosis.diagnose import diagnose
     from brake_hil.report.diagnosis_report import write_report
 
     rig = load_rig(rig_path)

@@ -1,18 +1,48 @@
-"""The one error hierarchy of brake_hil.
+"""The one error hierarchy of brake_hil: every error it raises on bad input, in one place.
 
 ::
 
     BrakeHilError
-     +-- RigError (BrakeHilError, ValueError)          a rig description is refused
-     +-- RecordingError (BrakeHilError, ValueError)    a recording cannot be used
-     |    +-- MissingTopicError                        a required topic is absent
-     +-- SignalError (BrakeHilError, ValueError)       a signal is too short or not periodic
+     +-- RigError (ValueError)              a rig description is refused
+     +-- RecordingError (ValueError)        a recording cannot be used
+     |    +-- MissingTopicError             a required topic is absent
+     +-- SignalError (ValueError)           a signal is too short or not periodic
+     +-- ModelFileError (ValueError)        a model file is missing or of an unknown kind
+     +-- ImprovedModelError (ValueError)    an improved_model.json is malformed
+     +-- BaselineError (ValueError)         a regression baseline is missing or malformed
+     +-- EffectError (ValueError)           an effect is unknown, doubled or out of bounds
+     +-- SimulationError (RuntimeError)     the virtual rig's solver failed
+     +-- CanDaqError                        a CAN acquisition cannot be set up
+          +-- DbcError (ValueError)         the CAN database does not describe rig frames
+          +-- FrameError (ValueError)       one received frame is refused
+               +-- UnknownFrameError        its id is not in the DBC
+               +-- FrameLengthError         its DLC differs from the DBC's
+               +-- ChecksumError            its crc8 does not match
 
 Each message names the file, key or topic and the problem, so the command line can print it
 as one line and exit with status 2.
 """
 
 from __future__ import annotations
+
+__all__ = [
+    "BaselineError",
+    "BrakeHilError",
+    "CanDaqError",
+    "ChecksumError",
+    "DbcError",
+    "EffectError",
+    "FrameError",
+    "FrameLengthError",
+    "ImprovedModelError",
+    "MissingTopicError",
+    "ModelFileError",
+    "RecordingError",
+    "RigError",
+    "SignalError",
+    "SimulationError",
+    "UnknownFrameError",
+]
 
 
 class BrakeHilError(Exception):
@@ -33,3 +63,47 @@ class MissingTopicError(RecordingError):
 
 class SignalError(BrakeHilError, ValueError):
     """A signal cannot be analysed (too short, no steady periodic segment, ...)."""
+
+
+class ModelFileError(BrakeHilError, ValueError):
+    """A model file is missing or of a kind no loader reads."""
+
+
+class ImprovedModelError(BrakeHilError, ValueError):
+    """An improved-model file is missing, malformed or names an unknown effect."""
+
+
+class BaselineError(BrakeHilError, ValueError):
+    """A baseline file is missing, unreadable or malformed."""
+
+
+class EffectError(BrakeHilError, ValueError):
+    """An effect is unknown, named twice, or has a parameter outside its bounds."""
+
+
+class SimulationError(BrakeHilError, RuntimeError):
+    """The virtual rig's solver failed (it names the time reached and the solver's message)."""
+
+
+class CanDaqError(BrakeHilError):
+    """A CAN acquisition cannot be set up."""
+
+
+class DbcError(CanDaqError, ValueError):
+    """The CAN database is missing or does not describe rig frames."""
+
+
+class FrameError(CanDaqError, ValueError):
+    """One received frame is refused."""
+
+
+class UnknownFrameError(FrameError):
+    """The frame's id is not in the DBC (or it is a remote frame)."""
+
+
+class FrameLengthError(FrameError):
+    """The frame's DLC differs from the DBC's length."""
+
+
+class ChecksumError(FrameError):
+    """The frame's crc8 does not match its content."""

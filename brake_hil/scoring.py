@@ -24,10 +24,10 @@ from pathlib import Path
 import statistics
 import time
 
-from brake_hil.core.diagnosis.diagnose import diagnose
-from brake_hil.core.rig import load_rig
+from brake_hil.diagnosis.diagnose import diagnose
 from brake_hil.errors import BrakeHilError
 from brake_hil.io.recording_reader import read_recording
+from brake_hil.physics.rig import load_rig
 from brake_hil.topics import MASTER_CYLINDER_PRESSURE, MEASURED_OUTPUTS
 
 CONFIDENCE_BINS = ((0.0, 0.5), (0.5, 0.7), (0.7, 0.9), (0.9, 1.01))

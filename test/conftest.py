@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from brake_hil.core.rig import Rig, load_rig
+from brake_hil.physics.rig import Rig, load_rig
 
 PROJECT = Path(__file__).resolve().parents[1]
 CONFIG = PROJECT / "config"

@@ -3,7 +3,7 @@
 The rig's DAQ sends one set of classic CAN frames per acquisition (``config/brake_rig.dbc``):
 ``BRAKE_HYDRAULIC`` (``p_i``, ``p_b``), ``BRAKE_MECHANICAL`` (``F_k``, ``x_c``) and, when the
 rig has an air-pressure sensor, ``BRAKE_AIR`` (``p_a``). Each carries the 16-bit sensor counts
-(the ranges of :mod:`brake_hil.core.measurement`), a 24-bit ``sample_counter`` shared by the
+(the ranges of :mod:`brake_hil.physics.measurement`), a 24-bit ``sample_counter`` shared by the
 frames of one acquisition, and a ``crc8`` (CRC-8/SAE-J1850 over the frame id and data bytes
 0-6, the AUTOSAR E2E idea of a data id in the checksum) in byte 7.
 
@@ -75,7 +75,13 @@ from typing import Any, Final, NamedTuple, Self
 import can
 import cantools
 
-from brake_hil.errors import BrakeHilError
+from brake_hil.errors import (
+    CanDaqError,
+    ChecksumError,
+    DbcError,
+    FrameLengthError,
+    UnknownFrameError,
+)
 
 DEFAULT_DBC_PATH: Final = Path(__file__).resolve().parents[2] / "config" / "brake_rig.dbc"
 """The rig's CAN database in a source checkout (see :func:`default_dbc_path`)."""
@@ -86,30 +92,6 @@ COUNTER_MODULUS: Final = 1 << 24
 _CRC_BYTE: Final = 7
 _NS_PER_S: Final = 1_000_000_000
 _DRIFT_ALLOWANCE: Final = 1e-4  # t0 may creep up by 100 ppm of elapsed time
-
-
-class CanDaqError(BrakeHilError):
-    """A CAN acquisition cannot be set up."""
-
-
-class DbcError(CanDaqError, ValueError):
-    """The CAN database is missing or does not describe rig frames."""
-
-
-class FrameError(CanDaqError, ValueError):
-    """One received frame is refused."""
-
-
-class UnknownFrameError(FrameError):
-    """The frame's id is not in the DBC (or it is a remote frame)."""
-
-
-class FrameLengthError(FrameError):
-    """The frame's DLC differs from the DBC's length."""
-
-
-class ChecksumError(FrameError):
-    """The frame's crc8 does not match its content."""
 
 
 def default_dbc_path() -> Path:

@@ -1,4 +1,4 @@
-"""Read a rig recording into a :class:`~brake_hil.core.recording.Recording`.
+"""Read a rig recording into a :class:`~brake_hil.analysis.recording.Recording`.
 
 Accepted (interface.md, "Recordings"): a rosbag2 directory (``metadata.yaml`` with one or
 more ``.mcap`` or ``.db3`` files), a bare ``.mcap`` file and a bare ``.db3`` file. rosbags'
@@ -28,10 +28,9 @@ import numpy as np
 from rosbags.interfaces import Connection
 from rosbags.rosbag2 import Reader
 
-from brake_hil.core.recording import Recording
-from brake_hil.core.types import FloatArray
+from brake_hil.analysis.recording import Recording
 from brake_hil.errors import MissingTopicError, RecordingError
-from brake_hil.io.stamped_cdr import IntArray, decode_stamped
+from brake_hil.io.stamped_cdr import decode_stamped
 from brake_hil.topics import (
     AIR_PRESSURE,
     BLOCK_FORCE,
@@ -43,6 +42,7 @@ from brake_hil.topics import (
     PREDICTED_CALIPER_DISPLACEMENT,
     TopicSpec,
 )
+from brake_hil.types import FloatArray, IntArray
 
 RECORDING_FIELDS: Final[Mapping[TopicSpec, str]] = {
     MASTER_CYLINDER_PRESSURE: "master_cylinder_pressure",

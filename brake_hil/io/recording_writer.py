@@ -37,11 +37,11 @@ from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.store import Typestore
 
 from brake_hil import __version__
-from brake_hil.core.recording import Recording
-from brake_hil.core.types import FloatArray
+from brake_hil.analysis.recording import Recording
 from brake_hil.io.recording_reader import RECORDING_FIELDS
-from brake_hil.io.stamped_cdr import IntArray, encode_stamped
+from brake_hil.io.stamped_cdr import encode_stamped
 from brake_hil.topics import TopicSpec
+from brake_hil.types import FloatArray, IntArray
 
 DEFAULT_START_STAMP_NS: Final = 1_700_000_000_000_000_000
 """Stamp of the first sample when none is given (ns since the epoch, 2023-11-14T22:13:20Z)."""

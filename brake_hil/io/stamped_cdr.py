@@ -24,13 +24,8 @@ from collections.abc import Sequence
 from typing import Final
 
 import numpy as np
-import numpy.typing as npt
 
-from brake_hil.core.types import FloatArray
-
-IntArray = npt.NDArray[np.int64]
-"""An int64 array (stamps in ns)."""
-ByteArray = npt.NDArray[np.uint8]
+from brake_hil.types import BoolArray, ByteArray, FloatArray, IntArray
 
 FLOAT_FIELDS: Final[dict[str, tuple[str, ...]]] = {
     "sensor_msgs/msg/FluidPressure": ("fluid_pressure", "variance"),
@@ -58,7 +53,7 @@ def _float_index(msgtype: str, field: str) -> int:
     return fields.index(field)
 
 
-def _body_offset(frame_id_size: npt.NDArray[np.int64]) -> npt.NDArray[np.int64]:
+def _body_offset(frame_id_size: IntArray) -> IntArray:
     """Byte offset of the first float64 field from the message start, per message."""
     return np.int64(4) + ((_HEADER_END + frame_id_size + 7) // 8) * 8
 
@@ -106,9 +101,7 @@ def encode_stamped(
     return out
 
 
-def _gather(
-    buffer: ByteArray, offsets: npt.NDArray[np.int64], width: int, little: npt.NDArray[np.bool_]
-) -> ByteArray:
+def _gather(buffer: ByteArray, offsets: IntArray, width: int, little: BoolArray) -> ByteArray:
     """``width`` bytes at each offset, in little-endian order, as an ``(n, width)`` array."""
     raw: ByteArray = buffer[offsets[:, None] + np.arange(width)]
     if not little.all():

@@ -4,13 +4,13 @@ Subscribes to ``/brake/master_cylinder/pressure`` (``p_i``) and publishes the pr
 ``/brake/model/bore/pressure``, ``/brake/model/block/force`` and
 ``/brake/model/caliper/displacement``, each stamped with the stamp of the input sample it was
 computed from (interface.md). A dedicated thread runs a 1 kHz loop on absolute deadlines
-(:class:`~brake_hil.core.realtime.DeadlineLoop`); each tick takes every input sample the
+(:class:`~brake_hil.runtime.DeadlineLoop`); each tick takes every input sample the
 middleware has received since the last tick (the subscription's own ``take``, with the
 middleware's receive time) and steps the model once for each, in order
-(:class:`~brake_hil.core.realtime.CatchUpRunner`), so no sample is skipped and the output
+(:class:`~brake_hil.runtime.CatchUpRunner`), so no sample is skipped and the output
 equals the offline batch model on the same samples (``LiveModel.batch``: same equilibrium
 start at the first sample). The tick's phase follows the input's arrival phase
-(:class:`~brake_hil.core.realtime.PhaseLock`), so a sample waits for its tick a fraction of a
+(:class:`~brake_hil.runtime.PhaseLock`), so a sample waits for its tick a fraction of a
 millisecond. That thread is the node's only Python thread (diagnostics are published from
 it too): nothing contends with it for the GIL at a deadline. So the node runs without an
 executor and without parameter services; its parameters are read-only, set at start.
@@ -22,7 +22,7 @@ The comparator filters predictions and measurements alike before scoring.)
 Parameters (``config/nodes.yaml``):
 
 - ``model_file`` (str): a rig YAML with optional ``model:`` overrides (or any kind
-  :mod:`brake_hil.core.model_file` has a loader for). Default ``config/rig_default.yaml``.
+  :mod:`brake_hil.live.model_file` has a loader for). Default ``config/rig_default.yaml``.
 - ``mean_pressure`` (float, Pa, 0.9e6): mean master-cylinder pressure the model's
   coefficients are derived at (the isothermal air modulus, eq. 18). The chain passes the
   replayed recording's mean ``p_i``.
@@ -64,9 +64,11 @@ from typing import Any
 from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.exceptions import ParameterException
 
-from brake_hil.core.model_file import load_model
-from brake_hil.core.parameters import DEFAULT_MEAN_PRESSURE
-from brake_hil.core.realtime import (
+from brake_hil.errors import BrakeHilError
+from brake_hil.live.model_file import load_model
+from brake_hil.nodes import common
+from brake_hil.physics.parameters import DEFAULT_MEAN_PRESSURE
+from brake_hil.runtime import (
     CatchUpRunner,
     DeadlineLoop,
     HoldMode,
@@ -77,8 +79,6 @@ from brake_hil.core.realtime import (
     Tick,
     set_process_realtime_priority,
 )
-from brake_hil.errors import BrakeHilError
-from brake_hil.nodes import common
 from brake_hil.topics import MASTER_CYLINDER_PRESSURE, PREDICTED_OUTPUTS
 
 NAME = "caliper_model"

@@ -38,10 +38,10 @@ from typing import Any
 import numpy as np
 import yaml
 
-from brake_hil.core.model_file import load_model
-from brake_hil.core.realtime import set_realtime_priority
 from brake_hil.errors import BrakeHilError
 from brake_hil.io.recording_reader import read_recording
+from brake_hil.live.model_file import load_model
+from brake_hil.runtime import set_realtime_priority
 from brake_hil.topics import (
     MASTER_CYLINDER_PRESSURE,
     MEASURED_OUTPUTS,

@@ -43,8 +43,8 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from rclpy.signals import SignalHandlerOptions
 from sensor_msgs.msg import FluidPressure
 
-from brake_hil.core.realtime import TimingSummary
 from brake_hil.io.stamped_cdr import FLOAT_FIELDS
+from brake_hil.runtime import TimingSummary
 from brake_hil.topics import TopicSpec
 
 DIAGNOSTICS_TOPIC = "/diagnostics"

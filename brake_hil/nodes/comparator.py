@@ -2,17 +2,17 @@
 
 Subscribes to the measured ``/brake/bore/pressure``, ``/brake/block/force``,
 ``/brake/caliper/displacement`` and the predicted ``/brake/model/...`` topics, pairs
-predicted with measured samples by stamp (:class:`~brake_hil.core.regression.StampPairer`),
+predicted with measured samples by stamp (:class:`~brake_hil.analysis.stamp_scoring.StampPairer`),
 and once per excitation cycle (5 Hz) publishes, for each channel, the seed's Table 4-5 metrics
 (peak-to-peak ratio %, ``tau/T`` %, NRMSE) of that cycle and of the rolling window of
-``window_cycles`` cycles ending with it (:func:`~brake_hil.core.regression.evaluate_cycle`:
+``window_cycles`` cycles ending with it (:func:`~brake_hil.analysis.stamp_scoring.evaluate_cycle`:
 both sides low-passed at 30 Hz, zero phase, steady pulsing only; one guard cycle after it,
 so figures lag a cycle) as ``diagnostic_msgs/msg/DiagnosticArray`` on ``/brake/comparison``
 and ``/diagnostics``. Cycles lie on a grid of stamps, from the first paired sample, moved
 once (by under half a period) to start at a peak of the measured bore pressure, so that
 each cycle holds both mean crossings; a late timer scores every cycle that fell due, so none
 is skipped. Levels
-come from :class:`~brake_hil.core.regression.Thresholds` on the window's metrics: OK, WARN,
+come from :class:`~brake_hil.analysis.stamp_scoring.Thresholds` on the window's metrics: OK, WARN,
 ERROR; STALE while there is nothing paired; OK with "not steady" during ramps and pauses.
 
 One thread does the node's work: every quarter cycle (50 ms) it takes what the six subscriptions
@@ -39,8 +39,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 import numpy as np
 from rclpy.exceptions import ParameterException
 
-from brake_hil.core.realtime import DeadlineLoop, Tick
-from brake_hil.core.regression import (
+from brake_hil.analysis.stamp_scoring import (
     METRIC_KEYS,
     PairedWindow,
     StampPairer,
@@ -51,6 +50,7 @@ from brake_hil.core.regression import (
 )
 from brake_hil.errors import BrakeHilError
 from brake_hil.nodes import common
+from brake_hil.runtime import DeadlineLoop, Tick
 from brake_hil.topics import MEASURED_OUTPUTS, OUTPUT_CHANNELS, PREDICTED_OUTPUTS
 
 NAME = "comparator"

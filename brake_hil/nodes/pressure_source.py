@@ -63,7 +63,11 @@ from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
-from brake_hil.core.realtime import (
+from brake_hil.analysis.recording import Recording
+from brake_hil.errors import BrakeHilError
+from brake_hil.io.recording_reader import read_recording
+from brake_hil.nodes import common
+from brake_hil.runtime import (
     LoopStatistics,
     StampMode,
     loop_span_ns,
@@ -73,10 +77,6 @@ from brake_hil.core.realtime import (
     set_timer_slack,
     sleep_until,
 )
-from brake_hil.core.recording import Recording
-from brake_hil.errors import BrakeHilError
-from brake_hil.io.recording_reader import read_recording
-from brake_hil.nodes import common
 from brake_hil.topics import (
     AIR_PRESSURE,
     BLOCK_FORCE,

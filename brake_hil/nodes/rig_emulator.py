@@ -1,7 +1,7 @@
 """Rig emulator node: a virtual rig run played out in real time, as the real rig presents it.
 
 The run is computed first (:func:`precompute_run`), then played at absolute 1 kHz deadlines
-(:class:`~brake_hil.core.realtime.DeadlineLoop`): sample ``k`` is due at ``t0 + k T``; a late
+(:class:`~brake_hil.runtime.DeadlineLoop`): sample ``k`` is due at ``t0 + k T``; a late
 wake-up sends the samples that fell due back to back (none is skipped, as a DAQ buffers).
 Outputs (``output``):
 
@@ -45,16 +45,16 @@ from diagnostic_msgs.msg import DiagnosticArray
 import numpy as np
 from rclpy.node import Node
 
-from brake_hil.core.excitation import pulsing_profile
-from brake_hil.core.lti_model import ModelInput, discretize, simulate, state_space
-from brake_hil.core.measurement import SENSORS, measure
-from brake_hil.core.parameters import derive_parameters
-from brake_hil.core.realtime import DeadlineLoop, LoopStatistics, Tick
-from brake_hil.core.rig import Rig, load_rig
-from brake_hil.core.types import FloatArray
 from brake_hil.errors import BrakeHilError
 from brake_hil.nodes import common
+from brake_hil.physics.excitation import pulsing_profile
+from brake_hil.physics.lti_model import ModelInput, discretize, simulate, state_space
+from brake_hil.physics.measurement import SENSORS, measure
+from brake_hil.physics.parameters import derive_parameters
+from brake_hil.physics.rig import Rig, load_rig
+from brake_hil.runtime import DeadlineLoop, LoopStatistics, Tick
 from brake_hil.topics import QUANTITY_TOPICS
+from brake_hil.types import FloatArray
 
 NAME = "rig_emulator"
 SAMPLE_PERIOD_NS = 1_000_000
@@ -86,10 +86,10 @@ def precompute_run(
     seed: int = 0,
 ) -> EmulatedRun:
     """The run to play: the seed's ramp-then-pulse input (Pa) through a simulator, measured by
-    the DAQ (noise, 16-bit quantisation, :mod:`brake_hil.core.measurement`).
+    the DAQ (noise, 16-bit quantisation, :mod:`brake_hil.physics.measurement`).
 
     ``simulator``: ``virtual_rig`` (:func:`brake_hil.virtual_rig.simulate_rig`, with
-    ``effects`` as ``parse_effect`` texts) or ``lti`` (:func:`brake_hil.core.lti_model.simulate`
+    ``effects`` as ``parse_effect`` texts) or ``lti`` (:func:`brake_hil.physics.lti_model.simulate`
     of the seed's model; ``effects`` must be empty).
 
     Raises:

@@ -18,11 +18,11 @@ from matplotlib.figure import Figure  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from brake_hil.core import signals  # noqa: E402
-from brake_hil.core.diagnosis.candidates import BY_NAME  # noqa: E402
-from brake_hil.core.diagnosis.diagnose import Diagnosis  # noqa: E402
-from brake_hil.core.diagnosis.evidence import PHASE_BINS  # noqa: E402
-from brake_hil.core.diagnosis.fitting import Model  # noqa: E402
+from brake_hil.analysis import signals  # noqa: E402
+from brake_hil.diagnosis.candidates import BY_NAME  # noqa: E402
+from brake_hil.diagnosis.diagnose import Diagnosis  # noqa: E402
+from brake_hil.diagnosis.evidence import PHASE_BINS  # noqa: E402
+from brake_hil.diagnosis.fitting import Model  # noqa: E402
 from brake_hil.topics import OUTPUT_CHANNELS  # noqa: E402
 
 UNITS = {"p_b": ("MPa", 1e-6), "F_k": ("kN", 1e-3), "x_c": ("um", 1e6)}

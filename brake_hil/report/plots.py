@@ -14,8 +14,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from brake_hil.core import signals  # noqa: E402
-from brake_hil.core.comparison import Comparison  # noqa: E402
+from brake_hil.analysis import signals  # noqa: E402
+from brake_hil.analysis.comparison import Comparison  # noqa: E402
 
 UNITS = {"p_b": ("MPa", 1e-6), "F_k": ("kN", 1e-3), "x_c": ("um", 1e6)}
 TITLES = {"p_b": "bore pressure p_b", "F_k": "block force F_k", "x_c": "caliper displacement x_c"}

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from brake_hil.core.rig import Rig
 from brake_hil.io.recording_writer import DEFAULT_START_STAMP_NS, write_recording
+from brake_hil.physics.rig import Rig
 from brake_hil.topics import QUANTITY_TOPICS
 from brake_hil.virtual_rig.rig_yaml import write_rig
 from brake_hil.virtual_rig.simulator import RigRun

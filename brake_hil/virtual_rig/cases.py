@@ -35,8 +35,8 @@ from typing import Any
 import numpy as np
 
 from brake_hil import __version__
-from brake_hil.core.excitation import SEED_MAX_PRESSURES
-from brake_hil.core.rig import Rig, rig_from_mapping
+from brake_hil.physics.excitation import SEED_MAX_PRESSURES
+from brake_hil.physics.rig import Rig, rig_from_mapping
 from brake_hil.virtual_rig.bag import write_run
 from brake_hil.virtual_rig.effects import EFFECTS, OUT_OF_LIBRARY, Effect, make_effect
 from brake_hil.virtual_rig.effects.sensor_delay import CHANNELS

@@ -15,8 +15,8 @@ import sys
 
 from tqdm import tqdm
 
-from brake_hil.core.rig import Rig, load_rig
 from brake_hil.errors import BrakeHilError
+from brake_hil.physics.rig import Rig, load_rig
 from brake_hil.virtual_rig.bag import write_run
 from brake_hil.virtual_rig.cases import generate_cases
 from brake_hil.virtual_rig.effects import EFFECTS, Effect, parse_effect

@@ -15,10 +15,10 @@ import math
 import numpy as np
 from scipy.signal import lfilter
 
-from brake_hil.core.excitation import SEED_MAX_PRESSURES, pulsing_profile
-from brake_hil.core.lti_model import ModelInput
-from brake_hil.core.rig import Rig
-from brake_hil.core.types import FloatArray
+from brake_hil.physics.excitation import SEED_MAX_PRESSURES, pulsing_profile
+from brake_hil.physics.lti_model import ModelInput
+from brake_hil.physics.rig import Rig
+from brake_hil.types import FloatArray
 from brake_hil.virtual_rig.effects.base import EffectError
 
 SAMPLE_RATE_HZ = 1000.0
@@ -78,7 +78,7 @@ def seed_pulsing(
 ) -> Excitation:
     """The seed's master-cylinder pressure: per maximum pressure (Pa), a ramp then pulsing.
 
-    See :func:`brake_hil.core.excitation.pulsing_profile`; ``SEED_MAX_PRESSURES`` gives the
+    See :func:`brake_hil.physics.excitation.pulsing_profile`; ``SEED_MAX_PRESSURES`` gives the
     seed's three segments (1.38, 2.07, 2.76 MPa).
     """
     time, pressure = pulsing_profile(

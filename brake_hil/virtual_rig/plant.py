@@ -14,7 +14,7 @@ from dataclasses import dataclass, field, replace
 import math
 from typing import TYPE_CHECKING
 
-from brake_hil.core.parameters import (
+from brake_hil.physics.parameters import (
     DEFAULT_MEAN_PRESSURE,
     ModelParameters,
     chamber_volumes,
@@ -22,7 +22,7 @@ from brake_hil.core.parameters import (
     line_inertance,
     line_resistance,
 )
-from brake_hil.core.rig import Rig
+from brake_hil.physics.rig import Rig
 from brake_hil.virtual_rig.effects.base import Effect, EffectError
 
 if TYPE_CHECKING:

@@ -1,6 +1,6 @@
 """Rig descriptions back to YAML: what the test engineer's rig file says (interface.md).
 
-:func:`rig_to_mapping` is the inverse of :func:`brake_hil.core.rig.rig_from_mapping`:
+:func:`rig_to_mapping` is the inverse of :func:`brake_hil.physics.rig.rig_from_mapping`:
 ``rig_from_mapping(rig_to_mapping(rig))`` gives the same values. Floats are written in their
 shortest exact form, so a perturbed truth rig survives the round trip bit for bit.
 """
@@ -14,7 +14,7 @@ from typing import Any
 
 import yaml
 
-from brake_hil.core.rig import Rig, rig_from_mapping
+from brake_hil.physics.rig import Rig, rig_from_mapping
 
 
 class _RigDumper(yaml.SafeDumper):
@@ -41,7 +41,7 @@ def _float(dumper: yaml.SafeDumper, value: float) -> yaml.ScalarNode:
 
 
 _RigDumper.add_representer(float, _float)
-_RigDumper.add_implicit_resolver(  # as brake_hil.core.rig's loader reads them: untagged
+_RigDumper.add_implicit_resolver(  # as brake_hil.physics.rig's loader reads them: untagged
     "tag:yaml.org,2002:float",
     re.compile(r"^[-+]?(?:\d+\.?\d*|\.\d+)[eE][-+]?\d+$"),
     list("-+0123456789."),

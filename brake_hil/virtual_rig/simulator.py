@@ -10,13 +10,13 @@ on arrays for the Jacobian (forward differences from one vectorised call). Betwe
 the input is read linearly (a first-order hold, as the LTI discretisation reads it), or by a
 cubic spline for the air pressure. The true signals are read at the 1 kHz stamps; the
 measurement chain then skews a channel if sensor_delay asks, adds sensor noise and quantises
-to 16 bits over the seed's sensor ranges (:mod:`brake_hil.core.measurement`). Measured
+to 16 bits over the seed's sensor ranges (:mod:`brake_hil.physics.measurement`). Measured
 signals are raw (unfiltered).
 
 The nominal compliances follow the seed's eq. 18 with the rig's own air isothermal at the
 *operating pressure*: a constant when given, otherwise the moving mean of ``p_i`` over one
 excitation period (so each steady segment sits at its own mean pressure, as
-:func:`brake_hil.core.comparison.compare` derives it). With no effect the equations are
+:func:`brake_hil.analysis.comparison.compare` derives it). With no effect the equations are
 exactly the LTI model's (eq. 21; with the air pressure as input the master piston gets a
 small damping, ``master_damping_ratio``, that eq. 21a lacks: without it a ~270 Hz mode rings
 undamped).
@@ -35,19 +35,19 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.interpolate import CubicSpline
 
-from brake_hil.core.lti_model import (
+from brake_hil.analysis.recording import Recording
+from brake_hil.errors import SimulationError
+from brake_hil.physics.lti_model import (
     ModelInput,
     air_driven_state_space,
     discretize,
     simulate,
     state_space,
 )
-from brake_hil.core.measurement import SENSORS, measure
-from brake_hil.core.parameters import DEFAULT_MEAN_PRESSURE, derive_parameters
-from brake_hil.core.recording import Recording
-from brake_hil.core.rig import Rig
-from brake_hil.core.types import FloatArray
-from brake_hil.errors import BrakeHilError
+from brake_hil.physics.measurement import SENSORS, measure
+from brake_hil.physics.parameters import DEFAULT_MEAN_PRESSURE, derive_parameters
+from brake_hil.physics.rig import Rig
+from brake_hil.types import FloatArray
 from brake_hil.virtual_rig.effects.base import Effect, Signal
 from brake_hil.virtual_rig.effects.seal_groove_asymmetry import asymmetric_spring
 from brake_hil.virtual_rig.effects.sensor_delay import ChannelSkew
@@ -457,10 +457,6 @@ class _Dynamics:
             physical[self.i_z] = float(np.clip(seal_x, -limit, limit))
         scaled: FloatArray = physical / self.scale
         return scaled
-
-
-class SimulationError(BrakeHilError, RuntimeError):
-    """The solver failed (it names the time reached and the solver's message)."""
 
 
 def master_pressure_estimate(rig: Rig, excitation: Excitation) -> FloatArray:

@@ -11,11 +11,11 @@ import sys
 import numpy as np
 import pytest
 
-from brake_hil.core.comparison import predict
-from brake_hil.core.excitation import pulsing_profile
-from brake_hil.core.parameters import derive_parameters
-from brake_hil.core.rig import Rig
+from brake_hil.analysis.comparison import predict
 from brake_hil.io.recording_writer import write_recording
+from brake_hil.physics.excitation import pulsing_profile
+from brake_hil.physics.parameters import derive_parameters
+from brake_hil.physics.rig import Rig
 from brake_hil.topics import (
     BLOCK_FORCE,
     BORE_PRESSURE,

@@ -8,7 +8,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from brake_hil.core.types import FloatArray
 from brake_hil.topics import (
     BLOCK_FORCE,
     BORE_PRESSURE,
@@ -19,6 +18,7 @@ from brake_hil.topics import (
     PREDICTED_CALIPER_DISPLACEMENT,
     TopicSpec,
 )
+from brake_hil.types import FloatArray
 
 PEER_DATA = (
     Path(

@@ -17,7 +17,6 @@ import can
 import numpy as np
 import pytest
 
-from brake_hil.core.measurement import SENSORS, measure
 from brake_hil.io.can_daq import (
     COUNTER_MODULUS,
     CanDaq,
@@ -29,6 +28,7 @@ from brake_hil.io.can_daq import (
     crc8_sae_j1850,
     default_dbc_path,
 )
+from brake_hil.physics.measurement import SENSORS, measure
 
 INTERFACE = "virtual"
 QUANTITIES = ("p_i", "p_b", "F_k", "x_c", "p_a")

@@ -8,7 +8,6 @@ from mcap.reader import make_reader
 import numpy as np
 import pytest
 
-from brake_hil.core.types import FloatArray
 from brake_hil.errors import MissingTopicError, RecordingError
 from brake_hil.io.recording_reader import list_topics, read_recording
 from brake_hil.io.recording_writer import (
@@ -25,6 +24,7 @@ from brake_hil.topics import (
     MASTER_CYLINDER_PRESSURE,
     TopicSpec,
 )
+from brake_hil.types import FloatArray
 
 Run = tuple[FloatArray, dict[TopicSpec, FloatArray]]
 

@@ -15,7 +15,6 @@ from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 import yaml
 
-from brake_hil.core.types import FloatArray
 from brake_hil.io.recording_reader import list_topics, read_recording
 from brake_hil.io.recording_writer import (
     DEFAULT_FRAME_ID,
@@ -34,6 +33,7 @@ from brake_hil.topics import (
     MASTER_CYLINDER_PRESSURE,
     TopicSpec,
 )
+from brake_hil.types import FloatArray
 
 Run = tuple[FloatArray, dict[TopicSpec, FloatArray]]
 

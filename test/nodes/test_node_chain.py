@@ -18,8 +18,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from brake_hil.core.model_file import load_model
 from brake_hil.io.recording_reader import read_recording
+from brake_hil.live.model_file import load_model
 from brake_hil.nodes import common
 from brake_hil.nodes.chain import NodeProcess, node_available, start_node, stop_node
 from brake_hil.topics import MASTER_CYLINDER_PRESSURE, MEASURED_OUTPUTS, PREDICTED_OUTPUTS

@@ -8,7 +8,7 @@ from typing import Any
 
 import pytest
 
-from brake_hil.core.rig import Rig, load_rig
+from brake_hil.physics.rig import Rig, load_rig
 from brake_hil.virtual_rig import RigRun, make_effect, seed_pulsing, simulate_rig
 from test.conftest import CONFIG
 

@@ -9,9 +9,9 @@ from mcap_ros2.decoder import DecoderFactory
 import numpy as np
 import pytest
 
-from brake_hil.core.rig import Rig, load_rig
 from brake_hil.io.recording_reader import read_recording
 from brake_hil.io.recording_writer import DEFAULT_START_STAMP_NS
+from brake_hil.physics.rig import Rig, load_rig
 from brake_hil.topics import QUANTITY_TOPICS
 from brake_hil.virtual_rig import simulate_rig, solenoid_pulsing
 from brake_hil.virtual_rig.bag import write_run

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from brake_hil.core.rig import load_rig
 from brake_hil.io.recording_reader import read_recording
+from brake_hil.physics.rig import load_rig
 from brake_hil.virtual_rig import EFFECTS
 from brake_hil.virtual_rig.cases import (
     PERTURBED_KEYS,

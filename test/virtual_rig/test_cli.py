@@ -7,8 +7,8 @@ from pathlib import Path
 import subprocess
 import sys
 
-from brake_hil.core.rig import load_rig
 from brake_hil.io.recording_reader import list_topics
+from brake_hil.physics.rig import load_rig
 from test.conftest import CONFIG
 
 RIG = CONFIG / "rig_default.yaml"

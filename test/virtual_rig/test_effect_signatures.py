@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from brake_hil.core import signals
-from brake_hil.core.characterization import characterize
+from brake_hil.analysis import signals
+from brake_hil.analysis.characterization import characterize
 from brake_hil.virtual_rig import RigRun
 from test.virtual_rig.conftest import RunFactory
 

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from brake_hil.core.excitation import SEED_MAX_PRESSURES
-from brake_hil.core.lti_model import ModelInput
-from brake_hil.core.rig import Rig
+from brake_hil.physics.excitation import SEED_MAX_PRESSURES
+from brake_hil.physics.lti_model import ModelInput
+from brake_hil.physics.rig import Rig
 from brake_hil.virtual_rig import (
     EffectError,
     Excitation,

@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from brake_hil.core.comparison import predict
-from brake_hil.core.lti_model import air_driven_state_space, discretize, simulate
-from brake_hil.core.measurement import SENSORS
-from brake_hil.core.parameters import derive_parameters
-from brake_hil.core.rig import Rig
+from brake_hil.analysis.comparison import predict
+from brake_hil.physics.lti_model import air_driven_state_space, discretize, simulate
+from brake_hil.physics.measurement import SENSORS
+from brake_hil.physics.parameters import derive_parameters
+from brake_hil.physics.rig import Rig
 from brake_hil.virtual_rig import (
     EFFECTS,
     EffectError,

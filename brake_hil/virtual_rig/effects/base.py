@@ -19,7 +19,7 @@ from dataclasses import dataclass, fields
 import math
 from typing import TYPE_CHECKING, Any, ClassVar, NamedTuple, TypeAlias
 
-from brake_hil.errors import BrakeHilError
+from brake_hil.errors import EffectError
 
 if TYPE_CHECKING:
     from brake_hil.virtual_rig.plant import Plant
@@ -28,10 +28,6 @@ if TYPE_CHECKING:
 Signal: TypeAlias = Any
 """A float or a float array (SI units as stated): every law runs on one state (Python floats,
 the fast path of the solver) or on many at once (arrays: Jacobians, outputs)."""
-
-
-class EffectError(BrakeHilError, ValueError):
-    """An effect is unknown, named twice, or has a parameter outside its bounds."""
 
 
 class Parameter(NamedTuple):

@@ -6,7 +6,7 @@ from dataclasses import dataclass, replace
 import math
 from typing import TYPE_CHECKING
 
-from brake_hil.core.parameters import seal_properties
+from brake_hil.physics.parameters import seal_properties
 from brake_hil.virtual_rig.effects import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter, Signal
 

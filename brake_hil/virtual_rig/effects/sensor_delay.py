@@ -9,7 +9,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 from scipy.signal import lfilter
 
-from brake_hil.core.types import FloatArray
+from brake_hil.types import FloatArray
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
 
 if TYPE_CHECKING:

@@ -7,8 +7,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from brake_hil.core.measurement import SENSORS
-from brake_hil.core.types import FloatArray
+from brake_hil.physics.measurement import SENSORS
+from brake_hil.types import FloatArray
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
 
 if TYPE_CHECKING:

@@ -1,0 +1,266 @@
+"""The comparator's scoring: predictions paired with measurements by stamp, the seed's Table 4-5
+metrics per cycle and window, OK/WARN/ERROR thresholds (shared by the ``comparator`` node and
+``brake-hil regress``)."""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from brake_hil.analysis import signals
+from brake_hil.errors import SignalError
+from brake_hil.types import FloatArray, IntArray
+
+METRIC_KEYS = ("ptp_ratio_pct", "tau_over_T_pct", "nrmse")
+"""The seed's Table 4-5 metrics, the ones thresholds and tolerances apply to."""
+OK, WARN, ERROR = 0, 1, 2
+"""Levels, as ``diagnostic_msgs/msg/DiagnosticStatus``."""
+DEFAULT_TOLERANCES: dict[str, float] = {
+    "ptp_ratio_pct": 0.5,
+    "tau_over_T_pct": 0.25,
+    "nrmse": 0.005,
+}
+"""How far (absolute) a metric may move from its baseline before ``regress`` fails."""
+
+
+# --------------------------------------------------------------------------- thresholds
+
+
+@dataclass(frozen=True)
+class Thresholds:
+    """Levels of a channel's metrics: WARN or ERROR past these (absolute) deviations."""
+
+    ptp_ratio_warn_pct: float = 10.0  # |ptp ratio - 100 %|
+    ptp_ratio_error_pct: float = 25.0
+    tau_over_T_warn_pct: float = 2.5  # |tau / T|
+    tau_over_T_error_pct: float = 5.0
+    nrmse_warn: float = 0.15
+    nrmse_error: float = 0.30
+
+    def level(self, metrics: Mapping[str, float]) -> int:
+        """OK, WARN or ERROR of one channel's ``{ptp_ratio_pct, tau_over_T_pct, nrmse}``."""
+        ptp = abs(metrics["ptp_ratio_pct"] - 100.0)
+        tau = abs(metrics["tau_over_T_pct"])
+        deviations = (
+            (ptp, self.ptp_ratio_warn_pct, self.ptp_ratio_error_pct),
+            (tau, self.tau_over_T_warn_pct, self.tau_over_T_error_pct),
+            (metrics["nrmse"], self.nrmse_warn, self.nrmse_error),
+        )
+        level = OK
+        for value, warn, error in deviations:
+            if not math.isfinite(value) or value > error:
+                return ERROR
+            if value > warn:
+                level = WARN
+        return level
+
+
+# --------------------------------------------------------------------------- pairing
+
+
+class PairedWindow(NamedTuple):
+    """Paired samples of one channel, in stamp order."""
+
+    stamps_ns: IntArray  # header.stamp (ns)
+    predicted: FloatArray  # channel unit
+    measured: FloatArray  # channel unit
+
+
+@dataclass
+class StampPairer:
+    """Pairs predicted with measured samples of one channel by equal stamps.
+
+    Samples wait for their partner in insertion-ordered dicts; when more than ``max_pending``
+    wait on one side the oldest are dropped and counted as unpaired. Paired samples are kept
+    in a ring of ``capacity``. Not thread-safe: feed it from one thread.
+    """
+
+    capacity: int = 4000
+    max_pending: int = 2000
+    paired: int = 0
+    unpaired_predicted: int = 0
+    unpaired_measured: int = 0
+    _predicted: dict[int, float] = field(default_factory=dict, repr=False)
+    _measured: dict[int, float] = field(default_factory=dict, repr=False)
+    _pairs: deque[tuple[int, float, float]] = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        self._pairs = deque(maxlen=self.capacity)
+
+    def add_predicted(self, stamp_ns: int, value: float) -> None:
+        """One predicted sample."""
+        partner = self._measured.pop(stamp_ns, None)
+        if partner is None:
+            self._predicted[stamp_ns] = value
+            if len(self._predicted) > self.max_pending:
+                del self._predicted[next(iter(self._predicted))]
+                self.unpaired_predicted += 1
+        else:
+            self._pairs.append((stamp_ns, value, partner))
+            self.paired += 1
+
+    def add_measured(self, stamp_ns: int, value: float) -> None:
+        """One measured sample."""
+        partner = self._predicted.pop(stamp_ns, None)
+        if partner is None:
+            self._measured[stamp_ns] = value
+            if len(self._measured) > self.max_pending:
+                del self._measured[next(iter(self._measured))]
+                self.unpaired_measured += 1
+        else:
+            self._pairs.append((stamp_ns, partner, value))
+            self.paired += 1
+
+    @property
+    def pending(self) -> tuple[int, int]:
+        """Samples waiting for a partner: ``(predicted, measured)``."""
+        return len(self._predicted), len(self._measured)
+
+    def window(self) -> PairedWindow:
+        """The paired samples held, sorted by stamp."""
+        pairs = sorted(self._pairs)
+        stamps = np.fromiter((p[0] for p in pairs), dtype=np.int64, count=len(pairs))
+        predicted = np.fromiter((p[1] for p in pairs), dtype=np.float64, count=len(pairs))
+        measured = np.fromiter((p[2] for p in pairs), dtype=np.float64, count=len(pairs))
+        return PairedWindow(stamps, predicted, measured)
+
+
+# --------------------------------------------------------------------------- scoring
+
+
+def metrics_dict(metrics: signals.ChannelMetrics) -> dict[str, float]:
+    """The metrics of one channel as floats (JSON-ready)."""
+    return {key: float(value) for key, value in metrics.as_dict().items()}
+
+
+def weighted_metrics(parts: Sequence[signals.ChannelMetrics]) -> dict[str, float]:
+    """Cycle-weighted means of several segments' metrics (as ``compare`` reports them)."""
+    weights = np.array([m.cycles for m in parts], dtype=float)
+    keys = (*METRIC_KEYS, "tau_1_s", "tau_2_s", "predicted_ptp", "measured_ptp")
+    result = {
+        key: float(np.average([getattr(m, key) for m in parts], weights=weights)) for key in keys
+    }
+    result["cycles"] = float(weights.sum())
+    return result
+
+
+def resample(
+    stamps_ns: IntArray, start_ns: int, count: int, period_ns: int, *values: FloatArray
+) -> tuple[FloatArray, list[FloatArray]]:
+    """Time (s from ``start_ns``) of ``count`` samples ``period_ns`` apart, and ``values``
+    (sampled at ``stamps_ns``) linearly interpolated there: exact where no pair is missing."""
+    grid = np.arange(count, dtype=np.float64) * period_ns
+    relative = (stamps_ns - start_ns).astype(np.float64)
+    return grid / 1e9, [np.interp(grid, relative, series) for series in values]
+
+
+class WindowResult(NamedTuple):
+    """The comparator's figures for one channel and one cycle."""
+
+    steady: bool  # the window is steady pulsing and scored
+    cycle: dict[str, float] | None  # metrics of the cycle (None: see reason)
+    window: dict[str, float] | None  # metrics over the rolling window ending with it
+    reason: str  # why a figure is missing ("" when both are there)
+
+
+def evaluate_cycle(
+    window: PairedWindow,
+    cycle_end_ns: int,
+    period_s: float = signals.EXCITATION_PERIOD_S,
+    window_cycles: int = 10,
+    sample_period_ns: int = 1_000_000,
+    min_steady_share: float = 0.8,
+    min_paired_share: float = 0.95,
+) -> WindowResult:
+    """Metrics of the cycle ending at ``cycle_end_ns`` and of the rolling window of
+    ``window_cycles`` cycles ending with it, for one channel's paired samples.
+
+    One guard period on each side of the window is low-passed with it (30 Hz, zero phase)
+    but not scored, against the filter's edge effects; ``window`` must hold samples up to one
+    period after ``cycle_end_ns``. The window counts when :func:`signals.steady_segments`
+    finds steady pulsing over at least ``min_steady_share`` of it, and when at least
+    ``min_paired_share`` of its samples are paired (missing ones are interpolated linearly).
+    """
+    stamps, predicted, measured = window
+    period_ns = round(period_s * 1e9)
+    start_ns = cycle_end_ns - (window_cycles + 1) * period_ns
+    stop_ns = cycle_end_ns + period_ns
+    if stamps.size < 2 or stamps[0] > start_ns or stamps[-1] < stop_ns - sample_period_ns:
+        return WindowResult(False, None, None, "window not covered by paired samples")
+    keep = (stamps >= start_ns - sample_period_ns) & (stamps <= stop_ns + sample_period_ns)
+    count = (stop_ns - start_ns) // sample_period_ns
+    present = int(np.count_nonzero(keep))
+    if present < min_paired_share * count:
+        return WindowResult(
+            False, None, None, f"only {present} of {count} samples of the window are paired"
+        )
+    time_s, (pred, meas) = resample(
+        stamps[keep], start_ns, count, sample_period_ns, predicted[keep], measured[keep]
+    )
+    rate = 1e9 / sample_period_ns
+    first_s, end_s = period_s, (cycle_end_ns - start_ns) / 1e9
+    try:
+        segments = signals.steady_segments(
+            time_s, meas, rate, period_s, settle_s=0.0, min_duration_s=0.0
+        )
+    except SignalError as err:
+        return WindowResult(False, None, None, f"not steady: {err}")
+    covered = sum(max(0.0, min(end_s, b) - max(first_s, a)) for a, b in segments)
+    if covered < min_steady_share * (end_s - first_s):
+        share = covered / (end_s - first_s)
+        return WindowResult(False, None, None, f"steady pulsing over {share:.0%} of the window")
+    filtered_pred = signals.lowpass(pred, rate)
+    filtered_meas = signals.lowpass(meas, rate)
+    scored = signals.segment_slice(time_s, first_s, end_s)
+    last = signals.segment_slice(time_s, end_s - period_s, end_s)
+    try:
+        window_metrics = signals.cycle_metrics(
+            filtered_pred[scored], filtered_meas[scored], time_s[scored], period_s
+        )
+    except SignalError as err:
+        return WindowResult(False, None, None, f"no metrics: {err}")
+    try:  # one cycle: a mean crossing right at its edge may be missed
+        cycle: dict[str, float] | None = metrics_dict(
+            signals.cycle_metrics(filtered_pred[last], filtered_meas[last], time_s[last], period_s)
+        )
+        reason = ""
+    except SignalError as err:
+        cycle, reason = None, f"no metrics for the cycle alone: {err}"
+    return WindowResult(True, cycle, metrics_dict(window_metrics), reason)
+
+
+def peak_stamp_ns(window: PairedWindow, period_s: float = signals.EXCITATION_PERIOD_S) -> int:
+    """Stamp (ns) of a maximum of the measured signal's fundamental (``1 / period_s``) in
+    ``window``: cycles that start there hold both mean crossings well inside them."""
+    stamps, _, measured = window
+    time_s = (stamps - stamps[0]).astype(np.float64) / 1e9
+    phasor = signals.harmonic_phasor(measured, time_s, 1.0 / period_s)
+    # x(t) ~ Re(X exp(j w t)) peaks where w t = -arg X (mod 2 pi)
+    fraction = (-np.angle(phasor) / (2.0 * np.pi)) % 1.0
+    return int(stamps[0]) + round(fraction * period_s * 1e9)
+
+
+def score_segments(
+    time_s: FloatArray,
+    predicted: Mapping[str, FloatArray],
+    measured: Mapping[str, FloatArray],
+    segments: Sequence[tuple[float, float]],
+    period_s: float = signals.EXCITATION_PERIOD_S,
+) -> dict[str, dict[str, float]]:
+    """Cycle-weighted metrics per channel over ``segments`` (s), both sides low-passed."""
+    rate = float(1.0 / np.median(np.diff(time_s)))
+    result = {}
+    for channel in predicted:
+        pred = signals.lowpass(predicted[channel], rate)
+        meas = signals.lowpass(measured[channel], rate)
+        parts = []
+        for start, end in segments:
+            part = signals.segment_slice(time_s, start, end)
+            parts.append(signals.cycle_metrics(pred[part], meas[part], time_s[part], period_s))
+        result[channel] = weighted_metrics(parts)
+    return result

@@ -1,0 +1,343 @@
+"""The comparator's metrics, and replay regression of recordings against a baseline (ROS-free).
+
+Scoring (shared by the ``comparator`` node and ``brake-hil regress``, so both agree):
+predicted and measured samples are paired by stamp (:class:`StampPairer`); both are
+conditioned alike with the seed's 30 Hz zero-phase low-pass (:func:`signals.lowpass`) and
+compared with the seed's Table 4-5 metrics (:func:`signals.cycle_metrics`: peak-to-peak ratio,
+``tau/T``, NRMSE) over steady 5 Hz cycles only. The live model steps on raw ``p_i``; filtering
+its output equals filtering its input (the model is linear), so the scores match
+``brake-hil compare`` up to the filter's edge effects and the operating point (``compare``
+derives the model at each segment's own mean pressure, the live model at one).
+
+* :func:`evaluate_cycle`: the comparator's figures for one cycle and the rolling window that
+  ends with it, with a guard cycle at each end of the window against filter edge effects,
+  and only when the window is steady pulsing (:func:`signals.steady_segments`).
+* :class:`Thresholds`: OK / WARN / ERROR of a channel's metrics.
+* :func:`replay_recording`: a recording through the live model's per-sample stepper (the
+  node's code path, faster than real time), scored over the recording's steady segments.
+* :func:`compare_with_baseline`: metric by metric against a stored baseline, with absolute
+  tolerances; :func:`load_baseline` / :func:`baseline_document` read and write its JSON;
+  :func:`run_regression` is ``brake-hil regress`` (bags replayed in parallel in a process
+  pool; the reader is passed in, so this module stays free of the I/O layer).
+
+Baseline JSON: ``{"model_file": path relative to the baseline's folder, "tolerances":
+{metric: absolute tolerance}, "bags": {name: {"metrics": {channel: {metric: value}}, ...}}}``,
+a bag named by its path relative to the baseline's folder.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
+import json
+import math
+import os
+from pathlib import Path
+import time
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from brake_hil.analysis import signals
+from brake_hil.analysis.recording import Recording
+from brake_hil.analysis.stamp_scoring import (
+    DEFAULT_TOLERANCES,
+    METRIC_KEYS,
+    score_segments,
+)
+from brake_hil.errors import BaselineError, RecordingError, SignalError
+from brake_hil.live.model_file import load_model
+from brake_hil.topics import OUTPUT_CHANNELS
+
+# --------------------------------------------------------------------------- replay
+
+
+@dataclass(frozen=True)
+class ReplayResult:
+    """One recording replayed through the model and scored."""
+
+    recording: str  # path
+    model_file: str
+    mean_pressure: float  # Pa, the model's operating point
+    samples: int
+    duration_s: float  # the recording's span (s)
+    replay_s: float  # wall time of the replay (s)
+    segments: list[tuple[float, float]]  # steady segments scored (s)
+    metrics: dict[str, dict[str, float]]  # channel -> metric -> value
+
+    @property
+    def replay_factor(self) -> float:
+        """How many times faster than real time the model ran."""
+        return self.duration_s / self.replay_s if self.replay_s > 0 else math.inf
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready."""
+        return {
+            "recording": self.recording,
+            "model_file": self.model_file,
+            "mean_pressure": self.mean_pressure,
+            "samples": self.samples,
+            "duration_s": self.duration_s,
+            "segments": [list(s) for s in self.segments],
+            "metrics": {channel: dict(values) for channel, values in self.metrics.items()},
+        }
+
+
+def replay_recording(
+    recording: Recording,
+    model_file: Path | str,
+    mean_pressure: float | None = None,
+    period_s: float = signals.EXCITATION_PERIOD_S,
+) -> ReplayResult:
+    """Step the model file's model over the recording's raw ``p_i`` sample by sample (the
+    live node's stepper), and score it over the steady segments of the filtered ``p_i``.
+
+    ``mean_pressure`` (Pa) defaults to the recording's mean ``p_i``, as the chain passes it
+    to the live node.
+
+    Raises:
+        RecordingError: the recording lacks a measured channel.
+        SignalError: it holds no steady pulsing (the message names the file).
+    """
+    measured = recording.measured()
+    missing = [key for key, value in measured.items() if value is None]
+    if missing:
+        raise RecordingError(f"{recording.path}: no measured {', '.join(missing)} to compare with")
+    pressure = recording.master_cylinder_pressure
+    mean = float(np.mean(pressure)) if mean_pressure is None else mean_pressure
+    model = load_model(model_file, mean)
+    stepper = model.stepper()
+    started = time.perf_counter()
+    outputs = np.array([stepper.step(value) for value in pressure.tolist()]).T
+    replay_s = time.perf_counter() - started
+    time_s = recording.time
+    rate = recording.sample_rate
+    try:
+        segments = signals.steady_segments(time_s, signals.lowpass(pressure, rate), rate, period_s)
+    except SignalError as err:
+        raise SignalError(f"{recording.path}: {err}") from err
+    predicted = dict(zip(OUTPUT_CHANNELS, outputs))
+    observed = {key: value for key, value in measured.items() if value is not None}
+    return ReplayResult(
+        recording=str(recording.path),
+        model_file=str(model_file),
+        mean_pressure=mean,
+        samples=int(pressure.size),
+        duration_s=float(time_s[-1] - time_s[0]),
+        replay_s=replay_s,
+        segments=[(float(a), float(b)) for a, b in segments],
+        metrics=score_segments(time_s, predicted, observed, segments, period_s),
+    )
+
+
+def replay_file(
+    path: Path,
+    model_file: Path,
+    reader: Callable[[Path], Recording],
+    mean_pressure: float | None = None,
+) -> ReplayResult:
+    """:func:`replay_recording` of the file ``path`` read by ``reader`` (for process pools)."""
+    return replay_recording(reader(path), model_file, mean_pressure)
+
+
+# --------------------------------------------------------------------------- baseline
+
+
+class MetricCheck(NamedTuple):
+    """One metric of one channel of one recording against its baseline."""
+
+    bag: str
+    channel: str
+    metric: str
+    baseline: float | None  # None: no baseline for it
+    value: float
+    tolerance: float
+
+    @property
+    def delta(self) -> float:
+        """Value minus baseline (NaN without a baseline)."""
+        return math.nan if self.baseline is None else self.value - self.baseline
+
+    @property
+    def status(self) -> str:
+        """``ok``, ``MOVED`` (past the tolerance) or ``NEW`` (no baseline)."""
+        if self.baseline is None:
+            return "NEW"
+        return "ok" if abs(self.delta) <= self.tolerance else "MOVED"
+
+
+def bag_key(path: Path | str, baseline_path: Path) -> str:
+    """Name of a recording in a baseline: its path relative to the baseline's folder."""
+    path = Path(path).resolve()
+    try:
+        return path.relative_to(baseline_path.resolve().parent).as_posix()
+    except ValueError:
+        return path.as_posix()
+
+
+def load_baseline(path: Path) -> dict[str, Any]:
+    """Read a baseline JSON (see :func:`baseline_document`).
+
+    Raises:
+        BaselineError: missing, unreadable or malformed file (the message names it).
+    """
+    try:
+        document = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError as err:
+        raise BaselineError(f"{path}: no such baseline file (write one with --update)") from err
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as err:
+        raise BaselineError(f"{path}: unreadable baseline: {err}") from err
+    if not isinstance(document, dict) or not isinstance(document.get("bags"), dict):
+        raise BaselineError(f"{path}: not a brake_hil baseline (no 'bags' mapping)")
+    tolerances = document.get("tolerances", DEFAULT_TOLERANCES)
+    if not isinstance(tolerances, dict) or not all(
+        isinstance(tolerances.get(k), int | float) for k in METRIC_KEYS
+    ):
+        raise BaselineError(f"{path}: 'tolerances' must give a number for each of {METRIC_KEYS}")
+    for name, entry in document["bags"].items():
+        metrics = entry.get("metrics") if isinstance(entry, dict) else None
+        if not isinstance(metrics, dict):
+            raise BaselineError(f"{path}: bag {name!r} has no 'metrics' mapping")
+    return document
+
+
+def compare_with_baseline(
+    results: Mapping[str, ReplayResult],
+    baseline: Mapping[str, Any],
+) -> list[MetricCheck]:
+    """Every metric of every result against ``baseline['bags'][key]['metrics']``."""
+    tolerances = {**DEFAULT_TOLERANCES, **baseline.get("tolerances", {})}
+    checks = []
+    for key, result in results.items():
+        stored = baseline.get("bags", {}).get(key, {}).get("metrics", {})
+        for channel in OUTPUT_CHANNELS:
+            for metric in METRIC_KEYS:
+                value = result.metrics[channel][metric]
+                reference = stored.get(channel, {}).get(metric)
+                checks.append(
+                    MetricCheck(
+                        key,
+                        channel,
+                        metric,
+                        None if reference is None else float(reference),
+                        value,
+                        float(tolerances[metric]),
+                    )
+                )
+    return checks
+
+
+def baseline_document(
+    results: Mapping[str, ReplayResult],
+    previous: Mapping[str, Any] | None = None,
+) -> dict[str, Any]:
+    """A baseline JSON with ``results`` (other bags and tolerances kept from ``previous``)."""
+    previous = previous or {}
+    bags = dict(previous.get("bags", {}))
+    for key, result in results.items():
+        bags[key] = result.as_dict()
+    document: dict[str, Any] = {
+        "about": "brake-hil regress baseline: comparator metrics of each recording replayed "
+        "through the model file's model; tolerances are absolute",
+        "tolerances": dict(previous.get("tolerances", DEFAULT_TOLERANCES)),
+        "bags": dict(sorted(bags.items())),
+    }
+    if "model_file" in previous:
+        document["model_file"] = previous["model_file"]
+    return document
+
+
+# --------------------------------------------------------------------------- the command
+
+
+def replay_all(
+    bags: Sequence[Path],
+    model_file: Path,
+    reader: Callable[[Path], Recording],
+    jobs: int | None = None,
+    mean_pressure: float | None = None,
+) -> list[ReplayResult]:
+    """:func:`replay_file` of every bag, in parallel over a process pool (in order)."""
+    workers = max(1, min(jobs or os.cpu_count() or 1, len(bags)))
+    if workers == 1:
+        return [replay_file(bag, model_file, reader, mean_pressure) for bag in bags]
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        futures = [
+            pool.submit(replay_file, bag, model_file, reader, mean_pressure) for bag in bags
+        ]
+        return [future.result() for future in futures]
+
+
+def format_checks(checks: Sequence[MetricCheck]) -> list[str]:
+    """The table ``regress`` prints: one line per bag, channel and metric."""
+    width = max([len(c.bag) for c in checks] + [3])
+    lines = [
+        f"{'bag':{width}s}  {'channel':7s} {'metric':15s}{'baseline':>12s}{'now':>12s}"
+        f"{'delta':>11s}{'tol':>9s}  status"
+    ]
+    for c in checks:
+        baseline = "-" if c.baseline is None else f"{c.baseline:.5g}"
+        delta = "-" if c.baseline is None else f"{c.delta:+.3g}"
+        lines.append(
+            f"{c.bag:{width}s}  {c.channel:7s} {c.metric:15s}{baseline:>12s}{c.value:12.5g}"
+            f"{delta:>11s}{c.tolerance:9.3g}  {c.status}"
+        )
+    return lines
+
+
+def run_regression(
+    bags: Sequence[Path],
+    baseline_path: Path,
+    reader: Callable[[Path], Recording],
+    model_file: Path | None = None,
+    update: bool = False,
+    jobs: int | None = None,
+    echo: Callable[[str], None] = print,
+) -> int:
+    """``brake-hil regress``: replay ``bags``, score, compare with (or ``update``) the baseline.
+
+    Returns the exit status: 0 when every metric is within its tolerance (or the baseline was
+    written), 1 when one moved past it or has no baseline yet.
+
+    Raises:
+        BaselineError: unusable baseline, no model file, or two bags with one name.
+        BrakeHilError: a bad recording or model file (the message names it).
+    """
+    previous = None if update and not baseline_path.exists() else load_baseline(baseline_path)
+    if model_file is None:
+        stored = (previous or {}).get("model_file")
+        if not isinstance(stored, str):
+            raise BaselineError(f"{baseline_path}: names no model file; pass --model")
+        model_file = Path(os.path.normpath(baseline_path.parent / stored))
+    load_model(model_file)  # a bad model file fails once, here
+    keys = [bag_key(bag, baseline_path) for bag in bags]
+    if len(set(keys)) != len(keys):
+        raise BaselineError(f"{baseline_path}: bags given twice: {sorted(keys)}")
+    started = time.perf_counter()
+    results = dict(zip(keys, replay_all(bags, model_file, reader, jobs)))
+    wall = time.perf_counter() - started
+    total = sum(r.duration_s for r in results.values())
+    for key, result in results.items():
+        echo(
+            f"{key}: {result.samples} samples ({result.duration_s:.1f} s) replayed through "
+            f"{model_file} at {result.replay_factor:.0f}x real time, "
+            f"{len(result.segments)} steady segments scored"
+        )
+    echo(f"{len(results)} recordings, {total:.1f} s of data in {wall:.2f} s wall time")
+    checks = compare_with_baseline(results, previous or {})
+    for line in format_checks(checks):
+        echo(line)
+    if update:
+        document = baseline_document(results, previous)
+        document["model_file"] = os.path.relpath(model_file, baseline_path.parent)
+        baseline_path.parent.mkdir(parents=True, exist_ok=True)
+        baseline_path.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
+        echo(f"baseline written to {baseline_path}")
+        return 0
+    moved = [c for c in checks if c.status != "ok"]
+    if moved:
+        echo(f"{len(moved)} metrics moved past their tolerance or have no baseline")
+        return 1
+    echo("every metric within its tolerance")
+    return 0

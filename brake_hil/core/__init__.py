@@ -1,1 +1,0 @@
-"""ROS-free core: physics, signals, identification and diagnosis (numpy/scipy only)."""

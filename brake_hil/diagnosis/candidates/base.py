@@ -1,0 +1,129 @@
+"""The one small interface every candidate model of the diagnosis shares.
+
+A candidate is the calibrated LTI model augmented with one piece of left-out physics. It
+declares its parameters (unit, bounds, start value, linear or logarithmic search), describes
+the physics and its source, states the signature it should leave in the data, and fills a
+:class:`Draft` of the simulator's :class:`~brake_hil.diagnosis.engine.ModelSpec` for a
+batch of parameter vectors. Two candidates combine by filling the same draft in turn.
+
+The candidates are deliberately simpler than the virtual rig's physics (an ideal Jenkins
+slider, not a rate-dependent bristle law; one lumped hose stage, not a ladder; isothermal,
+not polytropic air; a pure ``Q |Q|`` orifice; a linear drift, not a heating law), so the
+benchmark does not fit the very equations that made its data.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import ClassVar, NamedTuple
+
+import numpy as np
+
+from brake_hil.physics.parameters import (
+    ModelParameters,
+    SealProperties,
+    chamber_volumes,
+    line_resistance,
+    seal_properties,
+)
+from brake_hil.physics.rig import Rig
+from brake_hil.types import FloatArray
+
+
+class CandidateParameter(NamedTuple):
+    """One fitted parameter of a candidate."""
+
+    name: str
+    unit: str
+    low: float
+    high: float
+    start: float
+    logarithmic: bool = False  # search on log(value) (positive quantities spanning decades)
+
+
+@dataclass(frozen=True)
+class Context:
+    """What a candidate may know of the rig and the recording (never the label)."""
+
+    seal: SealProperties  # per-seal F_fs, k_s (seed eqs. 2-3)
+    bore_volume: float  # V_b, m^3 (eq. 20)
+    flow_amplitude: float  # |Q_h| amplitude of the calibrated LTI model, m^3/s
+    transducer_distance: float  # l_c, m
+    bore_friction_coefficient: float  # nominal mu_fb
+    time_reference: float  # s, middle of the training data (where drifts are zero)
+    hose_resistance_share: float = 0.3  # -, R_t / (R_r + R_v + R_t): the hose's part of R
+
+
+def rig_context(rig: Rig, flow_amplitude: float, time_reference: float) -> Context:
+    """The Context of a rig (seed eqs. 2-3, 13, 20) for a model's flow and time reference."""
+    viscosity = rig.fluid.viscosity
+    hose = line_resistance(rig.hose, viscosity)
+    total = (
+        line_resistance(rig.hard_pipe, viscosity)
+        + rig.model_overrides.get("R_v", rig.needle_valve_resistance)
+        + hose
+    )
+    return Context(
+        seal=seal_properties(rig),
+        bore_volume=chamber_volumes(rig)[1],
+        flow_amplitude=flow_amplitude,
+        transducer_distance=rig.transducer_distance,
+        bore_friction_coefficient=rig.bore_friction_coefficient,
+        time_reference=time_reference,
+        hose_resistance_share=hose / total,
+    )
+
+
+@dataclass
+class Draft:
+    """A ModelSpec under construction for a batch of parameter vectors."""
+
+    params: list[ModelParameters]
+    fields: dict[str, FloatArray] = field(default_factory=dict)
+
+    @property
+    def batch(self) -> int:
+        """Number of parameter sets."""
+        return len(self.params)
+
+    def scale(self, name: str, factors: FloatArray) -> None:
+        """Multiply one LTI coefficient of every set by its factor."""
+        self.params = [
+            p.with_changes(**{name: getattr(p, name) * float(f)})
+            for p, f in zip(self.params, factors)
+        ]
+
+    def add(self, name: str, values: FloatArray) -> None:
+        """Set (or add to) a ModelSpec field."""
+        self.fields[name] = self.fields.get(name, 0.0) + np.asarray(values, dtype=float)
+
+
+class Candidate:
+    """Base of the candidate models (see the modules beside this one)."""
+
+    name: ClassVar[str]
+    parameters: ClassVar[tuple[CandidateParameter, ...]]
+    signature: ClassVar[str]  # how it shows in a recording
+
+    def fill(self, draft: Draft, theta: FloatArray, context: Context) -> None:
+        """Add this physics to ``draft`` for parameter rows ``theta`` (B, P)."""
+        raise NotImplementedError
+
+    def consistent(self, evidence: dict[str, float]) -> bool:
+        """Whether the measured evidence shows this candidate's signature."""
+        return True
+
+    def plausible(self, theta: FloatArray) -> bool:
+        """Whether fitted parameters ``theta`` (this candidate's own) describe this physics
+        rather than a stand-in for something else (e.g. a common delay of every output is a
+        dynamics error, not an acquisition skew)."""
+        return True
+
+    def start(self, context: Context) -> FloatArray:
+        """Start values of the parameters (may use the rig's derived quantities)."""
+        return np.array([p.start for p in self.parameters])
+
+    @classmethod
+    def describe(cls) -> str:
+        """The physical description: the class docstring's first paragraphs, one line."""
+        return " ".join((cls.__doc__ or "").split())

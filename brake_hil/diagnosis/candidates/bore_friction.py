@@ -1,0 +1,46 @@
+"""bore_friction: Coulomb friction at the piston-bore contact from caliper cocking."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from brake_hil.diagnosis.candidates.base import (
+    Candidate,
+    CandidateParameter,
+    Context,
+    Draft,
+)
+from brake_hil.types import FloatArray
+
+CONTACT_STIFFNESS = 5.0e7
+"""Tangential stiffness of the piston-bore contact before it slides (N/m)."""
+
+
+class BoreFriction(Candidate):
+    """Bore friction: the cocked caliper presses the pistons against their bores.
+
+    As the caliper rotates by ``x_c / l_c`` the bore wall pushes on the piston with a normal
+    force ``2 N_b = 4 A_eb p_b |x_c| / l_c``; sliding against it costs Coulomb friction
+    ``F_fb = mu_fb 4 A_eb p_b |x_c| / l_c`` (seed eq. 8). Modelled as a stiff contact spring in
+    series with a slider whose threshold follows that force, in parallel with the seal.
+    """
+
+    name = "bore_friction"
+    parameters = (CandidateParameter("bore_friction_coefficient", "-", 0.0, 3.0, 0.2),)
+    signature = (
+        "extra damping that grows with p_b |x_c|: the high-pressure segments lose more "
+        "amplitude in x_c and F_k than the low"
+    )
+
+    def fill(self, draft: Draft, theta: FloatArray, context: Context) -> None:
+        """A slider whose threshold is mu 4 A_eb p_b |x_c| / l_c."""
+        bore_area = np.array([p.bore_area for p in draft.params])
+        if "jenkins_spring" not in draft.fields:
+            draft.fields["jenkins_spring"] = np.full(draft.batch, CONTACT_STIFFNESS)
+            draft.add("apply_threshold", np.zeros(draft.batch))
+            draft.add("release_threshold", np.zeros(draft.batch))
+        draft.add("bore_friction", 4.0 * theta[:, 0] * bore_area / context.transducer_distance)
+
+    def consistent(self, evidence: dict[str, float]) -> bool:
+        """The caliper or block channel is mispredicted."""
+        return max(evidence.get("nrmse_x_c", 0.0), evidence.get("nrmse_F_k", 0.0)) > 0.01

@@ -1,0 +1,321 @@
+"""Fit candidate models on the training windows and score them on the held-out windows.
+
+Each window is simulated from ``PREROLL`` seconds before it, starting at equilibrium, so the
+start-up transient has died away inside the window (the LTI model's slowest mode decays in
+about 0.1 s; a slider settles within one cycle). Training windows are capped at
+``FIT_SPAN`` seconds, which keeps a fit to a few seconds on this machine; held-out windows
+are scored whole.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.optimize
+
+from brake_hil.diagnosis.calibration import MODEL_ERROR, Calibration, apply_multipliers
+from brake_hil.diagnosis.candidates.base import Candidate, Context, Draft, rig_context
+from brake_hil.diagnosis.dataset import Dataset, Window
+from brake_hil.diagnosis.engine import ModelSpec, simulate_batch
+from brake_hil.topics import OUTPUT_CHANNELS
+from brake_hil.types import FloatArray, IndexArray
+
+PREROLL = 0.8
+"""Seconds simulated before a window (s)."""
+FIT_SPAN = 1.6
+"""Longest stretch of a training window used in a fit (s): eight 5 Hz cycles."""
+FIT_DECIMATION = 2
+"""Every n-th sample of a window enters the fit's residuals."""
+PRIOR_SPAN = 3.0
+"""Calibration multipliers may move this many prior sigmas in a candidate's fit."""
+
+
+@dataclass(frozen=True)
+class Fit:
+    """A candidate set fitted to the training windows and scored on the held-out ones."""
+
+    effects: tuple[str, ...]
+    theta: FloatArray  # fitted parameters, natural units, concatenated over effects
+    parameter_names: tuple[str, ...]
+    parameter_units: tuple[str, ...]
+    train_cost: float  # mean squared normalised residual, training windows
+    held_out_cost: float  # the same on the held-out windows
+    held_out_nrmse: dict[str, float]  # per channel, held-out windows
+    uncertainty: FloatArray | None = None  # one sigma of theta, natural units
+    window_costs: tuple[float, ...] = ()  # held_out_cost of each held-out window alone
+
+    def parameters(self) -> dict[str, float]:
+        """Fitted parameters by name."""
+        return dict(zip(self.parameter_names, self.theta.tolist()))
+
+    def uncertainties(self) -> dict[str, float]:
+        """One-sigma uncertainty of each fitted parameter (natural units, linearised)."""
+        if self.uncertainty is None:
+            return {}
+        return dict(zip(self.parameter_names, self.uncertainty.tolist()))
+
+
+class Model:
+    """A set of candidates on top of a calibration, simulated over dataset windows."""
+
+    def __init__(
+        self, calibration: Calibration, candidates: Sequence[Candidate], dataset: Dataset
+    ) -> None:
+        self.calibration = calibration
+        self.candidates = tuple(candidates)
+        self.dataset = dataset
+        self.context = make_context(calibration, dataset)
+        self.sizes = [len(c.parameters) for c in self.candidates]
+        self.pressure_ceiling = 1.2 * float(np.max(dataset.pressure))
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Effect names."""
+        return tuple(c.name for c in self.candidates)
+
+    @property
+    def effect_size(self) -> int:
+        """Number of the candidates' own parameters (theta's leading columns)."""
+        return sum(self.sizes)
+
+    def parameters(self) -> list[tuple[str, str, float, float, bool]]:
+        """``(name, unit, low, high, logarithmic)`` of every parameter, in theta order.
+
+        The candidates' parameters come first, then the calibration's multipliers, which are
+        re-fitted with every candidate under the same prior (a candidate must not be credited
+        with what a parameter within its tolerance explains).
+        """
+        own = [
+            (p.name, p.unit, p.low, p.high, p.logarithmic)
+            for c in self.candidates
+            for p in c.parameters
+        ]
+        sigmas = self.calibration.sigmas
+        multipliers = [
+            (
+                f"calibration.{name}",
+                "x",
+                float(np.exp(-PRIOR_SPAN * sigma)),
+                float(np.exp(PRIOR_SPAN * sigma)),
+                True,
+            )
+            for name, sigma in sigmas.items()
+        ]
+        return own + multipliers
+
+    def prior_sigmas(self) -> FloatArray:
+        """Log-sigma of each multiplier column (after the candidates' own columns)."""
+        return np.array(list(self.calibration.sigmas.values()))
+
+    def start(self) -> FloatArray:
+        """Start parameters: candidates' own, then the calibrated multipliers."""
+        parts = [c.start(self.context) for c in self.candidates]
+        parts.append(np.array(list(self.calibration.multipliers.values())))
+        return np.concatenate(parts)
+
+    def spec(self, window: Window, theta: FloatArray) -> ModelSpec:
+        """The simulator spec of every row of ``theta`` (B, P) for one window."""
+        names = list(self.calibration.sigmas)
+        rig = self.calibration.rig
+        draft = Draft(
+            [
+                apply_multipliers(rig, window.mean_pressure, dict(zip(names, row)))
+                for row in theta[:, self.effect_size :]
+            ]
+        )
+        column = 0
+        for candidate, size in zip(self.candidates, self.sizes):
+            candidate.fill(draft, theta[:, column : column + size], self.context)
+            column += size
+        return ModelSpec(tuple(draft.params), **draft.fields)  # type: ignore[arg-type]
+
+    def simulate(
+        self, window: Window, theta: FloatArray, span: float | None = None
+    ) -> tuple[FloatArray, IndexArray]:
+        """Outputs (B, 3, n) over a window (or its first ``span`` s) and its sample indices."""
+        ds = self.dataset
+        end = window.end if span is None else min(window.end, window.start + span)
+        first = int(np.searchsorted(ds.time, window.start - PREROLL))
+        last = int(np.searchsorted(ds.time, end - 1e-9))
+        inside = ds.time[first:last] >= window.start - 1e-9
+        outputs = simulate_batch(
+            self.spec(window, theta),
+            ds.pressure[first:last],
+            ds.sample_time,
+            start_time=float(ds.time[first]),
+            pressure_ceiling=self.pressure_ceiling,
+        )
+        return outputs[:, :, inside], np.arange(first, last)[inside]
+
+    def residuals(
+        self,
+        windows: Sequence[Window],
+        theta: FloatArray,
+        span: float | None = None,
+        decimation: int = 1,
+    ) -> FloatArray:
+        """Normalised residuals (B, samples) of each row of ``theta`` over ``windows``."""
+        scale = self.dataset.scale()
+        parts = []
+        for window in windows:
+            outputs, index = self.simulate(window, theta, span)
+            for channel, key in enumerate(OUTPUT_CHANNELS):
+                measured = self.dataset.measured[key][index]
+                parts.append(
+                    ((outputs[:, channel] - measured[None, :]) / scale[key])[:, ::decimation]
+                )
+        return np.concatenate(parts, axis=1)
+
+    def scores(
+        self, windows: Sequence[Window], theta: FloatArray
+    ) -> tuple[dict[str, float], tuple[float, ...]]:
+        """NRMSE per channel over ``windows``, and each window's cost alone.
+
+        A window's cost is the mean over channels of its squared NRMSE (the measure
+        ``Fit.held_out_cost`` takes over all held-out windows).
+        """
+        scale = self.dataset.scale()
+        errors: dict[str, list[FloatArray]] = {key: [] for key in OUTPUT_CHANNELS}
+        window_costs = []
+        for window in windows:
+            outputs, index = self.simulate(window, theta[None, :])
+            costs = []
+            for channel, key in enumerate(OUTPUT_CHANNELS):
+                residual = (outputs[0, channel] - self.dataset.measured[key][index]) / scale[key]
+                errors[key].append(residual)
+                costs.append(float(np.mean(residual**2)))
+            window_costs.append(float(np.mean(costs)))
+        nrmse = {key: float(np.sqrt(np.mean(np.concatenate(v) ** 2))) for key, v in errors.items()}
+        return nrmse, tuple(window_costs)
+
+
+def make_context(calibration: Calibration, dataset: Dataset) -> Context:
+    """What candidates may know: the rig's derived seal and volumes, the model's flow."""
+    rig = calibration.rig
+    window = dataset.segments[len(dataset.segments) // 2]
+    params = calibration.parameters(window.mean_pressure)
+    bore_amplitude = 0.5 * float(np.ptp(dataset.measured["p_b"][dataset.mask((window,))]))
+    # Fluid volume taken per pascal: the chamber's compliance and the caliper's give (eq. 21d
+    # with the quasi-static caliper of eq. 21f).
+    volume_per_pascal = params.bore_compliance + params.piston_area * params.bore_area / (
+        params.caliper_stiffness + params.effective_hydraulic_stiffness
+    )
+    flow = max(2 * np.pi * rig.excitation_hz * volume_per_pascal * bore_amplitude, 1e-9)
+    return rig_context(
+        rig,
+        flow_amplitude=flow,
+        time_reference=float(np.mean([0.5 * (w.start + w.end) for w in dataset.train])),
+    )
+
+
+def _to_search(model: Model, theta: FloatArray) -> FloatArray:
+    return np.array([np.log(v) if log else v for v, (*_, log) in zip(theta, model.parameters())])
+
+
+def _from_search(model: Model, x: FloatArray) -> FloatArray:
+    return np.array([np.exp(v) if log else v for v, (*_, log) in zip(x, model.parameters())])
+
+
+def fit(model: Model, start: FloatArray | None = None, max_iterations: int = 15) -> Fit:
+    """Bounded least squares on the training windows; score on the held-out windows.
+
+    The objective is the calibration's: data residuals over ``MODEL_ERROR`` plus the prior
+    on the calibration multipliers. The Jacobian's columns are simulated in one batch with
+    the point itself.
+    """
+    ds = model.dataset
+    specs = model.parameters()
+    own = model.effect_size
+    sigma = model.prior_sigmas()
+    lower = np.array([np.log(lo) if log else lo for _, _, lo, _, log in specs])
+    upper = np.array([np.log(hi) if log else hi for _, _, _, hi, log in specs])
+    x0 = np.clip(_to_search(model, model.start() if start is None else start), lower, upper)
+    width = upper - lower
+    steps = 1e-3 * np.maximum(width, 1e-6)
+    cache: dict[bytes, FloatArray] = {}
+
+    def rows(x: FloatArray) -> FloatArray:
+        points = [x] + [_step(x, j, steps[j], upper) for j in range(x.size)]
+        return np.array(points)
+
+    def objective(points: FloatArray) -> FloatArray:
+        thetas = np.array([_from_search(model, r) for r in points])
+        data = model.residuals(ds.train, thetas, FIT_SPAN, FIT_DECIMATION)
+        data = data / (MODEL_ERROR * np.sqrt(data.shape[1]))
+        return np.hstack([data, points[:, own:] / sigma])
+
+    def evaluate(x: FloatArray) -> FloatArray:
+        key = x.tobytes()
+        if key not in cache:
+            cache.clear()
+            cache[key] = objective(rows(x))
+        return cache[key]
+
+    def residual(x: FloatArray) -> FloatArray:
+        return np.asarray(evaluate(x)[0], dtype=float)
+
+    def jacobian(x: FloatArray) -> FloatArray:
+        r = evaluate(x)
+        actual = np.array([_step(x, j, steps[j], upper)[j] - x[j] for j in range(x.size)])
+        return np.asarray((r[1:] - r[0]).T / actual, dtype=float)
+
+    result = scipy.optimize.least_squares(
+        residual,
+        x0,
+        jac=jacobian,
+        bounds=(lower, upper),
+        method="trf",
+        max_nfev=max_iterations,
+        x_scale=width / 4,
+    )
+    theta = _from_search(model, result.x)
+    data_part = result.fun[: result.fun.size - sigma.size] * MODEL_ERROR
+    train_cost = float(np.sum(data_part**2))
+    uncertainty = _uncertainty(model, result.jac, theta, train_cost, data_part.size)
+    nrmse, window_costs = model.scores(ds.held_out, theta)
+    return Fit(
+        effects=model.names,
+        theta=theta,
+        parameter_names=tuple(name for name, *_ in specs),
+        parameter_units=tuple(unit for _, unit, *_ in specs),
+        train_cost=train_cost,
+        held_out_cost=float(np.mean([v**2 for v in nrmse.values()])),
+        held_out_nrmse=nrmse,
+        uncertainty=uncertainty,
+        window_costs=window_costs,
+    )
+
+
+def _step(x: FloatArray, j: int, size: float, upper: FloatArray) -> FloatArray:
+    """``x`` moved by ``size`` along ``j``, backwards where the upper bound is in the way."""
+    moved = x.copy()
+    moved[j] = x[j] + size if x[j] + size <= upper[j] else x[j] - size
+    return moved
+
+
+INDEPENDENT_SAMPLES_PER_SECOND = 60.0
+"""Independent samples per second and channel of a 30 Hz low-passed signal (Nyquist)."""
+
+
+def _uncertainty(
+    model: Model, jac: FloatArray, theta: FloatArray, cost: float, samples: int
+) -> FloatArray | None:
+    """Linearised one-sigma uncertainty of ``theta`` from the fit's Jacobian.
+
+    The Jacobian is of residuals scaled by ``MODEL_ERROR``; the misfit actually left is
+    ``cost`` (mean squared), and the residual samples are correlated (30 Hz low-pass), so
+    the count that sets the covariance is the independent one, about 60 per second and
+    channel.
+    """
+    span = sum(min(w.end - w.start, FIT_SPAN) for w in model.dataset.train)
+    independent = max(INDEPENDENT_SAMPLES_PER_SECOND * span * len(OUTPUT_CHANNELS), 2.0)
+    inflation = max(cost / MODEL_ERROR**2, 1e-6) * max(samples / independent, 1.0)
+    try:
+        covariance = np.linalg.inv(jac.T @ jac) * inflation
+    except np.linalg.LinAlgError:
+        return None
+    sigma = np.sqrt(np.clip(np.diag(covariance), 0.0, None))
+    logarithmic = np.array([log for *_, log in model.parameters()], dtype=bool)
+    return np.asarray(np.where(logarithmic, theta * sigma, sigma), dtype=float)

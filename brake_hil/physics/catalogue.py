@@ -1,0 +1,315 @@
+"""The catalogue of effects: the physics the seed's LTI model leaves out, one entry each.
+
+An entry is what every part of brake_hil agrees an effect *is*: its name (interface.md's
+effect table), the physics in words, where that physics is written down, how it shows in a
+recording, which measured channels it reaches, and the physical quantities it is described
+by with their units. Two families point to each entry:
+
+* the virtual rig's *truth law* (:mod:`brake_hil.virtual_rig.effects`), the richer physics
+  that makes test recordings;
+* the diagnosis's *candidate* (:mod:`brake_hil.diagnosis.candidates`), the simpler model
+  fitted to a recording.
+
+Adding an effect is one entry here (:func:`register` for one made at run time), one truth law
+and one candidate (CONTRIBUTING.md). Physics outside the library (what ``unexplained`` is
+tested on) has entries in :data:`OUT_OF_LIBRARY`: a truth law and no candidate.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+from typing import NamedTuple
+
+from brake_hil.errors import EffectError
+
+__all__ = [
+    "CATALOGUE",
+    "OUT_OF_LIBRARY",
+    "EffectEntry",
+    "Quantity",
+    "effect_names",
+    "entry",
+    "register",
+    "unregister",
+]
+
+CHANNELS = ("p_b", "F_k", "x_c")
+"""The measured outputs an effect can reach."""
+
+
+class Quantity(NamedTuple):
+    """A physical quantity an effect is described by."""
+
+    symbol: str  # as the seed or the physics text writes it
+    unit: str  # SI, "-" for dimensionless
+    meaning: str
+
+
+@dataclass(frozen=True)
+class EffectEntry:
+    """One effect of the library (or out of it): what both families point to."""
+
+    name: str  # interface.md's effect name
+    title: str  # one line
+    physics: str  # what happens, in words
+    source: str  # where the physics is written (seed equation, paper, textbook)
+    signature: str  # how it shows in a recording
+    channels: tuple[str, ...]  # the measured outputs its physics reaches
+    quantities: tuple[Quantity, ...]  # what it is described by, with units
+
+    def __post_init__(self) -> None:
+        if unknown := [c for c in self.channels if c not in CHANNELS]:
+            raise EffectError(f"effect {self.name}: unknown channel {unknown[0]!r}")
+
+    def describe(self) -> str:
+        """Title, physics, source and signature as one paragraph."""
+        return (
+            f"{self.name}: {self.title}. {self.physics} Source: {self.source}. "
+            f"Signature: {self.signature}."
+        )
+
+
+class _Catalogue(Mapping[str, EffectEntry]):
+    """Entries by name, in the order they were registered (interface.md's table first)."""
+
+    def __init__(self, entries: tuple[EffectEntry, ...]) -> None:
+        self._entries = {item.name: item for item in entries}
+
+    def __getitem__(self, name: str) -> EffectEntry:
+        return self._entries[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._entries)
+
+    def __len__(self) -> int:
+        return len(self._entries)
+
+    def add(self, item: EffectEntry) -> None:
+        if item.name in self._entries:
+            raise EffectError(f"effect {item.name} is already in the catalogue")
+        self._entries[item.name] = item
+
+    def remove(self, name: str) -> None:
+        self._entries.pop(name, None)
+
+
+def _q(symbol: str, unit: str, meaning: str) -> Quantity:
+    return Quantity(symbol, unit, meaning)
+
+
+CATALOGUE = _Catalogue(
+    (
+        EffectEntry(
+            name="seal_stick_slip",
+            title="Coulomb friction at the piston seals with stick and slip",
+            physics=(
+                "Each rectangular seal shears as a spring of stiffness k_s while its inner face "
+                "sticks to the piston, and slides once the shear force reaches the static "
+                "friction threshold F_fs, in place of the equivalent viscous k_eh, c_eh."
+            ),
+            source=(
+                "seed eqs. 2-6 and its two-valued stiffness; LuGre (Canudas de Wit et al., IEEE "
+                "TAC 40(3), 1995) for the truth law"
+            ),
+            signature=(
+                "k_eh from characterize falls as the pressure amplitude grows; super-harmonics "
+                "grow from p_i to x_c; the loop of seal force against seal displacement is a "
+                "parallelogram with flat slipping edges; at low amplitude the rig is stiffer "
+                "than the seed's k_eh* = 0.29"
+            ),
+            channels=("F_k", "x_c"),
+            quantities=(
+                _q("k_s", "N/m", "shear stiffness of one seal while stuck"),
+                _q("F_fs", "N", "static friction threshold of one seal"),
+                _q("phi", "-", "share of the seal force carried by friction"),
+            ),
+        ),
+        EffectEntry(
+            name="seal_groove_asymmetry",
+            title="seal stiffness or slip threshold differs between apply and release",
+            physics=(
+                "Grooves chamfered on the pressure side let the seal shear easily as the piston "
+                "moves out and roll it back more stiffly, about a relaxed position that creeps."
+            ),
+            source="seed, section 'Characterisation of k_eh' (named and ignored there)",
+            signature=(
+                "even harmonics (10, 20 Hz) in x_c and F_k that p_i lacks; a lopsided x_c "
+                "waveform (apply and release halves differ); the mean x_c shifted"
+            ),
+            channels=("F_k", "x_c"),
+            quantities=(
+                _q("a", "-", "asymmetry: stiffness (1 - a) on apply, (1 + a) on release"),
+                _q("tau_r", "s", "creep time of the seal's relaxed position"),
+            ),
+        ),
+        EffectEntry(
+            name="entrained_air",
+            title="a bulk modulus that rises with pressure (air compressed in the fluid)",
+            physics=(
+                "Air bubbles in the fluid compress with pressure, so the chamber's compliance "
+                "is large at low pressure and small at high, instead of eq. 18's value at one "
+                "mean pressure."
+            ),
+            source="seed eq. 18 (linearised there); Boyle's law, polytropic for the truth law",
+            signature=(
+                "p_b lower and later than predicted at low pressure, the mismatch shrinking as "
+                "the mean pressure grows; p_b flattened at its troughs (super-harmonics)"
+            ),
+            channels=("p_b", "F_k", "x_c"),
+            quantities=(_q("j", "-", "free-air volume fraction of the fluid at gauge zero"),),
+        ),
+        EffectEntry(
+            name="orifice_flow",
+            title="a quadratic, turbulent pressure drop across the needle valve",
+            physics=(
+                "Past a throttling needle the flow separates and the drop follows the orifice "
+                "equation dp = rho Q |Q| / (2 C_d^2 A^2), not the linear R_v Q."
+            ),
+            source="seed eqs. 15-16 (linearised there); Merritt 1967, eq. 3-6",
+            signature=(
+                "p_b's peak-to-peak falls short of the prediction more as the flow amplitude "
+                "grows; p_b lags more at large amplitude and is flattened near its turning "
+                "points (a 3rd harmonic p_i lacks)"
+            ),
+            channels=("p_b", "F_k", "x_c"),
+            quantities=(_q("K", "Pa s^2/m^6", "orifice coefficient of dp = K Q |Q|"),),
+        ),
+        EffectEntry(
+            name="hose_compliance",
+            title="compliance of the hose between master cylinder and bore (an extra RC stage)",
+            physics=(
+                "A braided hose swells with pressure and stores fluid between the valve and the "
+                "bore, which eq. 21c neglects (eq. 18 folds the walls into the bore's modulus)."
+            ),
+            source="seed eqs. 13, 18, 21c",
+            signature=(
+                "p_b lags p_i more and its peak-to-peak is lower than predicted, more at higher "
+                "frequency; F_k and x_c follow p_b; the mismatch hardly depends on pressure"
+            ),
+            channels=("p_b", "F_k", "x_c"),
+            quantities=(_q("C_h", "m^3/Pa", "compliance of the hose node"),),
+        ),
+        EffectEntry(
+            name="bore_friction",
+            title="Coulomb friction at the piston-bore contact from caliper cocking",
+            physics=(
+                "As the caliper rotates by x_c / l_c the bore wall presses on the piston with a "
+                "normal force ~ A_eb p_b |x_c| / l_c; sliding against it costs Coulomb friction."
+            ),
+            source="seed eq. 8; Dahl (1968) for the truth law's presliding",
+            signature=(
+                "extra damping that grows with p_b |x_c|: c_eh and eta_eh above the prediction, "
+                "the high-pressure segments lose more amplitude in x_c and F_k than the low"
+            ),
+            channels=("F_k", "x_c"),
+            quantities=(_q("mu_fb", "-", "piston-bore friction coefficient"),),
+        ),
+        EffectEntry(
+            name="eccentric_load",
+            title="the caliper sees a share of the pressure force that may shift with load",
+            physics=(
+                "When the block's centre of force is off the pistons' axis, moment arms make the "
+                "support columns carry part of the load, so the caliper body sees s A_eb p_b."
+            ),
+            source="seed eq. 22",
+            signature=(
+                "x_c's amplitude and mean are mispredicted while p_b and F_k are right; the "
+                "error grows with load; x_c's phase unchanged"
+            ),
+            channels=("x_c",),
+            quantities=(
+                _q("s0", "-", "change of the caliper's force share at the reference load"),
+                _q("s1", "-", "change of the share per reference pressure"),
+            ),
+        ),
+        EffectEntry(
+            name="thermal_drift",
+            title="parameters drifting during the recording (fluid viscosity, seal modulus)",
+            physics=(
+                "As the rig warms up, brake-fluid viscosity falls (Andrade) and the seal "
+                "softens, so the line resistance and the seal's k_eh, c_eh drift during a run."
+            ),
+            source="seed eqs. 6, 13; Andrade's viscosity law for the truth law",
+            signature=(
+                "a mismatch that grows steadily over the recording whatever the pressure; the "
+                "same pressure segment repeated late does not match its early twin"
+            ),
+            channels=("p_b", "F_k", "x_c"),
+            quantities=(
+                _q("r_R", "1/s", "relative drift rate of the line resistance"),
+                _q("r_s", "1/s", "relative drift rate of k_eh and c_eh"),
+            ),
+        ),
+        EffectEntry(
+            name="sensor_delay",
+            title="a measured channel lags the others (acquisition skew)",
+            physics=(
+                "Multiplexed DAQs, anti-alias filters and CAN gateways delay channels by "
+                "different times."
+            ),
+            source="acquisition chain (not in the seed)",
+            signature=(
+                "one channel's tau / T offset from the others' by delay / T, the same in every "
+                "segment and at every pressure; amplitudes agree"
+            ),
+            channels=("p_b", "F_k", "x_c"),
+            quantities=(_q("d", "s", "delay of a channel relative to p_i"),),
+        ),
+    )
+)
+"""Every effect of interface.md's table (less ``unexplained``), in its order."""
+
+OUT_OF_LIBRARY = _Catalogue(
+    (
+        EffectEntry(
+            name="sensor_nonlinearity",
+            title="a load cell whose gain grows with load",
+            physics="The sensor's output is x (1 + c x): a static nonlinear map of one channel.",
+            source="measurement chain (not in the seed)",
+            signature=(
+                "one output's amplitude ratio to the others grows with the pressure; its phase "
+                "and the other channels unchanged"
+            ),
+            channels=("F_k",),
+            quantities=(_q("c", "1/unit", "relative gain change per unit of the reading"),),
+        ),
+    )
+)
+"""Physics no candidate models: a case with it is labelled ``unexplained``."""
+
+
+def effect_names() -> tuple[str, ...]:
+    """The library's effect names, in catalogue order."""
+    return tuple(CATALOGUE)
+
+
+def entry(name: str) -> EffectEntry:
+    """The entry of ``name``, in or out of the library.
+
+    Raises:
+        EffectError: no such effect.
+    """
+    for catalogue in (CATALOGUE, OUT_OF_LIBRARY):
+        if name in catalogue:
+            return catalogue[name]
+    known = ", ".join([*CATALOGUE, *OUT_OF_LIBRARY])
+    raise EffectError(f"unknown effect {name!r} (known: {known})")
+
+
+def register(item: EffectEntry, *, in_library: bool = True) -> EffectEntry:
+    """Add an effect made at run time (a plug-in, a test) to the catalogue.
+
+    Raises:
+        EffectError: an effect of that name is already there.
+    """
+    if item.name in CATALOGUE or item.name in OUT_OF_LIBRARY:
+        raise EffectError(f"effect {item.name} is already in the catalogue")
+    (CATALOGUE if in_library else OUT_OF_LIBRARY).add(item)
+    return item
+
+
+def unregister(name: str) -> None:
+    """Remove an effect added by :func:`register` (nothing when absent)."""
+    CATALOGUE.remove(name)
+    OUT_OF_LIBRARY.remove(name)

@@ -1,0 +1,30 @@
+"""Timing of the real-time loops: absolute deadlines, catch-up stepping, self-measurement.
+
+ROS-free (stdlib and numpy), so every piece is testable with a fake clock. The nodes own the
+ROS plumbing; the timing and the stepping policy live here:
+
+* :class:`DeadlineLoop` calls a function at absolute deadlines ``t0 + k T`` (monotonic
+  clock, ns) on its own thread: a ``time.sleep`` to ``spin`` before the deadline, then a
+  short spin that yields the GIL, so the grid never drifts. A tick that wakes a period or
+  more late skips the grid slots that have passed (counted) instead of bursting, because one
+  tick already steps every sample that arrived (:class:`CatchUpRunner`).
+* :class:`PhaseLock` places the grid's phase just after the input samples usually arrive, so
+  a sample waits for its tick a fraction of a period rather than a uniform 0-1 period.
+* :class:`CatchUpRunner` steps the model once per input sample that arrived since the last
+  tick, in arrival order, each prediction carrying its sample's stamp; it watches the input
+  (:class:`InputState`) and, in :attr:`HoldMode.HOLD` only, free-runs on the last input while
+  the input is silent, flagging those predictions.
+* :class:`Histogram` and :class:`LoopStatistics` keep whole-run percentiles in bounded memory
+  (1 us bins) beside a window that the diagnostics reset once a report.
+* :func:`replay_deadlines` paces a recording by its stamps at a rate factor.
+
+Times: ``*_ns`` are integers in nanoseconds; ``*_us`` floats in microseconds. Monotonic times
+(deadlines, arrivals) come from ``time.monotonic_ns``; stamps are ``header.stamp`` (ns since
+the epoch).
+"""
+
+from __future__ import annotations
+
+from brake_hil.runtime.catch_up import *  # noqa: F403
+from brake_hil.runtime.deadline_loop import *  # noqa: F403
+from brake_hil.runtime.timing import *  # noqa: F403

@@ -1,0 +1,136 @@
+"""The comparator's scoring and the replay regression's baseline logic (no ROS)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from brake_hil.analysis.comparison import compare
+from brake_hil.analysis.stamp_scoring import (
+    DEFAULT_TOLERANCES,
+    PairedWindow,
+    StampPairer,
+    Thresholds,
+    evaluate_cycle,
+    peak_stamp_ns,
+)
+from brake_hil.app.regress import (
+    MetricCheck,
+    baseline_document,
+    compare_with_baseline,
+    load_baseline,
+    replay_recording,
+)
+from brake_hil.errors import BaselineError
+from brake_hil.io.recording_reader import read_recording
+from test.conftest import CONFIG, PROJECT
+
+BAG = PROJECT / "bags" / "one_washer_lti"
+RIG = CONFIG / "rig_default.yaml"
+MS = 1_000_000
+
+
+def test_pairer_pairs_by_stamp_in_either_order_and_drops_the_unpaired() -> None:
+    pairer = StampPairer(capacity=10, max_pending=3)
+    pairer.add_measured(2, 20.0)
+    pairer.add_predicted(1, 1.5)
+    pairer.add_predicted(2, 2.5)
+    pairer.add_measured(1, 10.0)
+    stamps, predicted, measured = pairer.window()
+    assert stamps.tolist() == [1, 2]
+    assert predicted.tolist() == [1.5, 2.5] and measured.tolist() == [10.0, 20.0]
+    for stamp in range(10, 15):  # never measured
+        pairer.add_predicted(stamp, 0.0)
+    assert pairer.unpaired_predicted == 2 and pairer.pending == (3, 0)
+
+
+def test_thresholds_give_ok_warn_error() -> None:
+    thresholds = Thresholds()
+    good = {"ptp_ratio_pct": 104.0, "tau_over_T_pct": 1.5, "nrmse": 0.04}
+    assert thresholds.level(good) == 0
+    assert thresholds.level({**good, "nrmse": 0.2}) == 1
+    assert thresholds.level({**good, "ptp_ratio_pct": 70.0}) == 2
+    assert thresholds.level({**good, "tau_over_T_pct": float("nan")}) == 2
+
+
+def _window(gain: float, lag_ms: int, seconds: float = 3.0, ramp: bool = False) -> PairedWindow:
+    stamps = 1_700_000_000 * 10**9 + np.arange(round(seconds * 1000), dtype=np.int64) * MS
+    t = (stamps - stamps[0]) / 1e9
+    if ramp:
+        measured = 1e6 * t
+        return PairedWindow(stamps, measured, measured)
+    measured = 1e6 + 3e5 * np.sin(2 * np.pi * 5 * t)
+    predicted = 1e6 + gain * 3e5 * np.sin(2 * np.pi * 5 * (t + lag_ms / 1000))
+    return PairedWindow(stamps, predicted, measured)
+
+
+def test_a_cycle_of_a_known_gain_and_lead_is_scored_as_such() -> None:
+    window = _window(gain=1.1, lag_ms=4)
+    peak = peak_stamp_ns(window)
+    assert (peak - int(window.stamps_ns[0])) % (200 * MS) == pytest.approx(50 * MS, abs=MS)
+    end = peak + 11 * 200 * MS  # cycles from peak to peak: 10 cycles after the leading guard
+    result = evaluate_cycle(window, end, window_cycles=10)
+    assert result.steady, result.reason
+    assert result.cycle is not None and result.window is not None
+    assert result.window["ptp_ratio_pct"] == pytest.approx(110.0, abs=0.2)
+    assert result.cycle["tau_over_T_pct"] == pytest.approx(2.0, abs=0.1)  # 4 ms of 200 ms
+    assert result.window["cycles"] == 10 and result.cycle["cycles"] == 1
+
+
+def test_ramps_and_uncovered_windows_are_not_scored() -> None:
+    ramp = _window(1.0, 0, ramp=True)
+    end = int(ramp.stamps_ns[0]) + 11 * 200 * MS
+    assert not evaluate_cycle(ramp, end).steady
+    short = _window(1.0, 0, seconds=1.0)
+    result = evaluate_cycle(short, int(short.stamps_ns[0]) + 800 * MS, window_cycles=10)
+    assert not result.steady and "not covered" in result.reason
+
+
+def test_replay_scores_the_bundled_bag_as_compare_does() -> None:
+    recording = read_recording(BAG)
+    result = replay_recording(recording, RIG)
+    assert result.samples == 18000 and len(result.segments) == 3
+    assert result.replay_factor > 10.0
+    from brake_hil.physics.rig import load_rig
+
+    reference = compare(recording, load_rig(RIG)).metrics()
+    for channel in ("p_b", "F_k", "x_c"):
+        ours, theirs = result.metrics[channel], reference[channel]
+        assert ours["ptp_ratio_pct"] == pytest.approx(theirs["ptp_ratio_pct"], abs=0.2)
+        assert ours["tau_over_T_pct"] == pytest.approx(theirs["tau_over_T_pct"], abs=0.1)
+        assert ours["nrmse"] == pytest.approx(theirs["nrmse"], rel=0.02)
+
+
+def test_metrics_past_their_tolerance_are_flagged(tmp_path: Path) -> None:
+    result = replay_recording(read_recording(BAG), RIG)
+    document = baseline_document({"bag": result})
+    checks = compare_with_baseline({"bag": result}, document)
+    assert {c.status for c in checks} == {"ok"}
+    document["bags"]["bag"]["metrics"]["x_c"]["nrmse"] += 2 * DEFAULT_TOLERANCES["nrmse"]
+    moved = [c for c in compare_with_baseline({"bag": result}, document) if c.status != "ok"]
+    assert [(c.channel, c.metric, c.status) for c in moved] == [("x_c", "nrmse", "MOVED")]
+    assert compare_with_baseline({"other": result}, document)[0].status == "NEW"
+    assert MetricCheck("b", "p_b", "nrmse", 0.1, 0.1049, 0.005).status == "ok"
+
+
+def test_bad_baselines_are_refused_naming_the_file(tmp_path: Path) -> None:
+    with pytest.raises(BaselineError, match="no such baseline"):
+        load_baseline(tmp_path / "missing.json")
+    broken = tmp_path / "broken.json"
+    broken.write_text("{not json", encoding="utf-8")
+    with pytest.raises(BaselineError, match=str(broken)):
+        load_baseline(broken)
+    wrong = tmp_path / "wrong.json"
+    wrong.write_text(json.dumps({"bags": {"x": {"metrics": 1}}}), encoding="utf-8")
+    with pytest.raises(BaselineError, match="'x' has no 'metrics'"):
+        load_baseline(wrong)
+
+
+def test_the_shipped_baseline_matches_the_bundled_bag() -> None:
+    baseline = load_baseline(PROJECT / "bags" / "baseline.json")
+    result = replay_recording(read_recording(BAG), PROJECT / "bags" / baseline["model_file"])
+    checks = compare_with_baseline({"one_washer_lti": result}, baseline)
+    assert [c for c in checks if c.status != "ok"] == []

@@ -1,0 +1,126 @@
+"""The verdict as a pure function of the fits' held-out costs, and the noise floor."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+from brake_hil.diagnosis import diagnose as diagnosis
+from brake_hil.diagnosis.dataset import Dataset, Window
+from brake_hil.diagnosis.diagnose import Hypothesis, Summary, decide
+
+BASE = 1.0e-5  # held-out cost of the baseline (NRMSE 0.3 %)
+
+
+def single(name: str, cost: float, windows: tuple[float, ...] | None = None) -> Hypothesis:
+    return Hypothesis((name,), 1, cost, windows or (cost,) * 3, True, True)
+
+
+def pair(a: str, b: str, cost: float) -> Hypothesis:
+    return Hypothesis((a, b), 2, cost, (cost,) * 3, True, True)
+
+
+def summary(*hypotheses: Hypothesis, base: float = BASE) -> Summary:
+    return Summary(
+        baseline_cost=base,
+        baseline_window_costs=(base,) * 3,
+        baseline_nrmse=base**0.5,
+        noise_cost=base / 100,
+        singles=tuple(h for h in hypotheses if len(h.effects) == 1),
+        pairs=tuple(h for h in hypotheses if len(h.effects) == 2),
+    )
+
+
+def test_a_clear_single_is_named_with_high_confidence() -> None:
+    verdict = decide(summary(single("orifice_flow", BASE / 50), single("thermal_drift", BASE)))
+    assert verdict.effects == ("orifice_flow",) and verdict.chosen == ("orifice_flow",)
+    assert verdict.confidence > 0.9
+
+
+def test_small_gains_leave_the_baseline_and_a_large_misfit_is_unexplained() -> None:
+    small = summary(single("orifice_flow", BASE / 1.2), base=1e-8)
+    assert decide(small).effects == ()
+    large = summary(single("orifice_flow", 0.01 / 1.2), base=0.01)
+    assert decide(large).effects == ("unexplained",)
+
+
+def test_a_pair_needs_to_beat_its_better_single_again() -> None:
+    a, b = single("entrained_air", BASE / 10), single("thermal_drift", BASE / 1.1)
+    assert decide(summary(a, b, pair("entrained_air", "thermal_drift", BASE / 12))).effects == (
+        "entrained_air",
+    )
+    both = decide(summary(a, b, pair("entrained_air", "thermal_drift", BASE / 40)))
+    assert set(both.effects) == {"entrained_air", "thermal_drift"}
+
+
+def test_a_pair_is_found_when_neither_effect_alone_clears_acceptance() -> None:
+    a, b = single("bore_friction", BASE / 1.5), single("thermal_drift", BASE / 1.4)
+    verdict = decide(summary(a, b, pair("bore_friction", "thermal_drift", BASE / 12)))
+    assert set(verdict.effects) == {"bore_friction", "thermal_drift"}
+
+
+def test_a_fit_that_hurts_one_held_out_window_is_refused(monkeypatch: pytest.MonkeyPatch) -> None:
+    patchy = single("sensor_delay", BASE / 3, (BASE / 8, BASE / 0.7, BASE / 8))
+    monkeypatch.setattr(diagnosis, "WINDOW_FLOOR", 0.9)
+    assert decide(summary(patchy)).effects == ()
+    monkeypatch.setattr(diagnosis, "WINDOW_FLOOR", 0.5)
+    assert decide(summary(patchy)).effects == ("sensor_delay",)
+
+
+def test_nothing_is_named_while_the_misfit_is_within_a_few_noise_variances() -> None:
+    near_noise = dataclasses.replace(
+        summary(single("hose_compliance", BASE / 4)), noise_cost=BASE / 5
+    )
+    verdict = decide(near_noise)
+    assert verdict.effects == () and verdict.chosen is None
+    assert decide(dataclasses.replace(near_noise, noise_cost=BASE / 50)).effects == (
+        "hose_compliance",
+    )
+
+
+def test_implausible_fits_are_never_named() -> None:
+    stand_in = Hypothesis(("sensor_delay",), 3, BASE / 30, (BASE / 30,) * 3, False, True)
+    assert decide(summary(stand_in, single("thermal_drift", BASE / 3))).effects == (
+        "thermal_drift",
+    )
+
+
+def test_the_summary_replays_through_json() -> None:
+    orifice = dataclasses.replace(
+        single("orifice_flow", BASE / 50), channel_nrmse={"p_b": 1e-3, "F_k": 2e-4, "x_c": 3e-4}
+    )
+    original = dataclasses.replace(
+        summary(orifice, pair("orifice_flow", "x", BASE / 60)),
+        baseline_channel_nrmse={"p_b": 7e-3, "F_k": 1e-3, "x_c": 2e-3},
+    )
+    again = Summary.from_dict(json.loads(json.dumps(original.as_dict())))
+    assert again == original
+    assert decide(again) == decide(original)
+
+
+def test_noise_floor_is_the_cycle_to_cycle_variance() -> None:
+    rate, period = 500.0, 0.2
+    time = np.arange(0.0, 6.0, 1.0 / rate)
+    rng = np.random.default_rng(1)
+    noise = 0.01
+    measured = {
+        key: np.sin(2 * np.pi * time / period) + rng.normal(0.0, noise, time.size)
+        for key in ("p_b", "F_k", "x_c")
+    }
+    window = Window(1.0, 5.0, 1.0e6, 0)
+    dataset = Dataset(
+        name="synthetic",
+        time=time,
+        pressure=np.zeros_like(time),
+        measured=measured,
+        train=(window,),
+        held_out=(window,),
+        segments=(window,),
+        period=period,
+        sample_time=1.0 / rate,
+    )
+    scale = np.mean([np.ptp(v[(time >= 1.0) & (time < 5.0)]) for v in measured.values()])
+    assert dataset.noise_cost() == pytest.approx((noise / scale) ** 2, rel=0.1)
