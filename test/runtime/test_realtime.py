@@ -148,7 +148,7 @@ def test_the_loop_thread_stops_and_keeps_an_error_of_its_tick() -> None:
     errors: list[BaseException] = []
 
     def tick(t: Tick) -> None:
-        if t.slot == 3:
+        if t.slot >= 3:  # a late first tick skips slots (busy runner): not == 3
             raise RuntimeError("boom")
 
     loop = DeadlineLoop(tick, 1 * MS, 100_000, on_error=errors.append)
