@@ -45,7 +45,7 @@ from typing import Any
 PROJECT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(PROJECT))
 
-from brake_hil.nodes.chain import (  # noqa: E402
+from brake_hil.app.chain import (  # noqa: E402
     NodeProcess,
     choose_domain_id,
     node_available,

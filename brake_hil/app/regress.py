@@ -1,24 +1,20 @@
-"""The comparator's metrics, and replay regression of recordings against a baseline (ROS-free).
+"""``brake-hil regress``: replay recordings through a model file and hold the comparator's
+metrics against a baseline (ROS-free).
 
-Scoring (shared by the ``comparator`` node and ``brake-hil regress``, so both agree):
-predicted and measured samples are paired by stamp (:class:`StampPairer`); both are
-conditioned alike with the seed's 30 Hz zero-phase low-pass (:func:`signals.lowpass`) and
-compared with the seed's Table 4-5 metrics (:func:`signals.cycle_metrics`: peak-to-peak ratio,
-``tau/T``, NRMSE) over steady 5 Hz cycles only. The live model steps on raw ``p_i``; filtering
-its output equals filtering its input (the model is linear), so the scores match
+The scoring is the comparator node's (:mod:`brake_hil.analysis.stamp_scoring`), so the node
+and this command agree: the live model steps on raw ``p_i``; its output and the measurements
+are low-passed alike (the model is linear, so filtering its output equals filtering its
+input) and compared with the seed's Table 4-5 metrics over the steady 5 Hz cycles, which match
 ``brake-hil compare`` up to the filter's edge effects and the operating point (``compare``
 derives the model at each segment's own mean pressure, the live model at one).
 
-* :func:`evaluate_cycle`: the comparator's figures for one cycle and the rolling window that
-  ends with it, with a guard cycle at each end of the window against filter edge effects,
-  and only when the window is steady pulsing (:func:`signals.steady_segments`).
-* :class:`Thresholds`: OK / WARN / ERROR of a channel's metrics.
 * :func:`replay_recording`: a recording through the live model's per-sample stepper (the
   node's code path, faster than real time), scored over the recording's steady segments.
 * :func:`compare_with_baseline`: metric by metric against a stored baseline, with absolute
-  tolerances; :func:`load_baseline` / :func:`baseline_document` read and write its JSON;
-  :func:`run_regression` is ``brake-hil regress`` (bags replayed in parallel in a process
-  pool; the reader is passed in, so this module stays free of the I/O layer).
+  tolerances; :func:`load_baseline` / :func:`baseline_document` read and write its JSON.
+* :func:`run_regression` is the command: bags replayed over
+  :func:`~brake_hil.app.parallel.parallel_map`, the baseline compared or rewritten; it
+  prints nothing and returns a :class:`Regression`.
 
 Baseline JSON: ``{"model_file": path relative to the baseline's folder, "tolerances":
 {metric: absolute tolerance}, "bags": {name: {"metrics": {channel: {metric: value}}, ...}}}``,
@@ -28,8 +24,8 @@ a bag named by its path relative to the baseline's folder.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
+from functools import partial
 import json
 import math
 import os
@@ -46,7 +42,9 @@ from brake_hil.analysis.stamp_scoring import (
     METRIC_KEYS,
     score_segments,
 )
+from brake_hil.app.parallel import Outcome, parallel_map, values
 from brake_hil.errors import BaselineError, RecordingError, SignalError
+from brake_hil.io.recording_reader import read_recording
 from brake_hil.live.model_file import load_model
 from brake_hil.topics import OUTPUT_CHANNELS
 
@@ -254,51 +252,78 @@ def baseline_document(
 def replay_all(
     bags: Sequence[Path],
     model_file: Path,
-    reader: Callable[[Path], Recording],
+    reader: Callable[[Path], Recording] = read_recording,
     jobs: int | None = None,
     mean_pressure: float | None = None,
+    progress: Callable[[Outcome[ReplayResult]], None] | None = None,
 ) -> list[ReplayResult]:
-    """:func:`replay_file` of every bag, in parallel over a process pool (in order)."""
-    workers = max(1, min(jobs or os.cpu_count() or 1, len(bags)))
-    if workers == 1:
-        return [replay_file(bag, model_file, reader, mean_pressure) for bag in bags]
-    with ProcessPoolExecutor(max_workers=workers) as pool:
-        futures = [
-            pool.submit(replay_file, bag, model_file, reader, mean_pressure) for bag in bags
-        ]
-        return [future.result() for future in futures]
+    """:func:`replay_file` of every bag over :func:`~brake_hil.app.parallel.parallel_map`.
+
+    Args:
+        bags: recordings to replay.
+        model_file: the model file every bag is replayed through.
+        reader: reads a recording (must pickle: a module-level function).
+        jobs: worker processes (``None``: one per CPU).
+        mean_pressure: the model's operating point (Pa); default each recording's mean ``p_i``.
+        progress: called with each bag's outcome, in the bags' order.
+
+    Returns:
+        One result per bag, in order.
+
+    Raises:
+        BrakeHilError: the first bag (in order) that could not be replayed; the others were.
+    """
+    replay = partial(
+        replay_file, model_file=model_file, reader=reader, mean_pressure=mean_pressure
+    )
+    return values(parallel_map(replay, bags, jobs, progress))
 
 
-def format_checks(checks: Sequence[MetricCheck]) -> list[str]:
-    """The table ``regress`` prints: one line per bag, channel and metric."""
-    width = max([len(c.bag) for c in checks] + [3])
-    lines = [
-        f"{'bag':{width}s}  {'channel':7s} {'metric':15s}{'baseline':>12s}{'now':>12s}"
-        f"{'delta':>11s}{'tol':>9s}  status"
-    ]
-    for c in checks:
-        baseline = "-" if c.baseline is None else f"{c.baseline:.5g}"
-        delta = "-" if c.baseline is None else f"{c.delta:+.3g}"
-        lines.append(
-            f"{c.bag:{width}s}  {c.channel:7s} {c.metric:15s}{baseline:>12s}{c.value:12.5g}"
-            f"{delta:>11s}{c.tolerance:9.3g}  {c.status}"
-        )
-    return lines
+@dataclass(frozen=True)
+class Regression:
+    """What ``brake-hil regress`` found: each bag's replay and its metrics against the baseline."""
+
+    baseline_path: Path
+    model_file: Path
+    results: dict[str, ReplayResult]  # bag key (see :func:`bag_key`) -> replay
+    checks: tuple[MetricCheck, ...]  # every metric of every bag against the baseline
+    wall_s: float  # wall time of all replays (s)
+    updated: bool  # the baseline was (re)written with these results
+
+    @property
+    def data_s(self) -> float:
+        """Seconds of recorded data replayed, over every bag."""
+        return sum(result.duration_s for result in self.results.values())
+
+    @property
+    def moved(self) -> tuple[MetricCheck, ...]:
+        """Checks past their tolerance or without a baseline."""
+        return tuple(check for check in self.checks if check.status != "ok")
 
 
 def run_regression(
     bags: Sequence[Path],
     baseline_path: Path,
-    reader: Callable[[Path], Recording],
     model_file: Path | None = None,
     update: bool = False,
     jobs: int | None = None,
-    echo: Callable[[str], None] = print,
-) -> int:
+    progress: Callable[[Outcome[ReplayResult]], None] | None = None,
+    reader: Callable[[Path], Recording] = read_recording,
+) -> Regression:
     """``brake-hil regress``: replay ``bags``, score, compare with (or ``update``) the baseline.
 
-    Returns the exit status: 0 when every metric is within its tolerance (or the baseline was
-    written), 1 when one moved past it or has no baseline yet.
+    Args:
+        bags: recordings to replay.
+        baseline_path: the baseline JSON (written when ``update``).
+        model_file: the model file; default the baseline's.
+        update: rewrite the baseline with these results instead of only comparing.
+        jobs: parallel replays (``None`` or 0: one per CPU).
+        progress: called with each bag's outcome, in the bags' order.
+        reader: reads a recording (must pickle: a module-level function).
+
+    Returns:
+        The replays and their checks; the command exits 0 when the baseline was written or
+        nothing moved (:attr:`Regression.moved`), else 1.
 
     Raises:
         BaselineError: unusable baseline, no model file, or two bags with one name.
@@ -315,29 +340,12 @@ def run_regression(
     if len(set(keys)) != len(keys):
         raise BaselineError(f"{baseline_path}: bags given twice: {sorted(keys)}")
     started = time.perf_counter()
-    results = dict(zip(keys, replay_all(bags, model_file, reader, jobs)))
+    results = dict(zip(keys, replay_all(bags, model_file, reader, jobs or None, None, progress)))
     wall = time.perf_counter() - started
-    total = sum(r.duration_s for r in results.values())
-    for key, result in results.items():
-        echo(
-            f"{key}: {result.samples} samples ({result.duration_s:.1f} s) replayed through "
-            f"{model_file} at {result.replay_factor:.0f}x real time, "
-            f"{len(result.segments)} steady segments scored"
-        )
-    echo(f"{len(results)} recordings, {total:.1f} s of data in {wall:.2f} s wall time")
     checks = compare_with_baseline(results, previous or {})
-    for line in format_checks(checks):
-        echo(line)
     if update:
         document = baseline_document(results, previous)
         document["model_file"] = os.path.relpath(model_file, baseline_path.parent)
         baseline_path.parent.mkdir(parents=True, exist_ok=True)
         baseline_path.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
-        echo(f"baseline written to {baseline_path}")
-        return 0
-    moved = [c for c in checks if c.status != "ok"]
-    if moved:
-        echo(f"{len(moved)} metrics moved past their tolerance or have no baseline")
-        return 1
-    echo("every metric within its tolerance")
-    return 0
+    return Regression(baseline_path, model_file, results, tuple(checks), wall, update)

@@ -1,9 +1,11 @@
 """Concealed-effect benchmark: labelled virtual-rig cases for scoring a diagnosis blind.
 
-:func:`generate_cases` writes ``DIR/cases/NNN/recording/`` (a rosbag2 MCAP directory) and
-``DIR/cases/NNN/rig.yaml`` (the *nominal* rig the engineer believes) for each case, and the
-labels apart from them in ``DIR/labels.json``, which a diagnosis run on ``DIR/cases`` never
-reads. A case is:
+Here the cases are described (:func:`plan_cases`, :func:`select_cases`), one is simulated and
+written (:func:`make_case`: ``DIR/cases/NNN/recording/``, a rosbag2 MCAP directory, and
+``DIR/cases/NNN/rig.yaml``, the *nominal* rig the engineer believes), and the labels are
+written apart from them (:func:`write_labels`: ``DIR/labels.json``, which a diagnosis run on
+``DIR/cases`` never reads); :func:`brake_hil.app.cases.generate_cases` runs
+:func:`make_case` over the described cases in parallel. A case is:
 
 * ``null``: a parameter error only (truth differs from nominal within the rig tolerances);
 * ``single``: one effect at a ``subtle`` (strength 0.15-0.35) or ``strong`` (0.7-1.0)
@@ -25,8 +27,7 @@ values 30 %, ``fluid.air_fraction`` 100 %, the rest 10 %, one sigma) and clipped
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import ProcessPoolExecutor
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 import json
 from pathlib import Path
@@ -300,59 +301,30 @@ def make_case(spec: CaseSpec, cases_dir: Path, pulsing_s: float) -> dict[str, An
     return result
 
 
-def _make_case_job(job: tuple[CaseSpec, Path, float]) -> tuple[str, dict[str, Any]]:
-    spec, cases_dir, pulsing_s = job
-    return spec.case_id, make_case(spec, cases_dir, pulsing_s)
-
-
-def generate_cases(
-    out: Path | str,
-    count: int,
-    seed: int = 0,
+def write_labels(
+    out: Path,
+    labels: Mapping[str, dict[str, Any]],
     *,
-    pulsing_s: float = 5.0,
-    jobs: int = 1,
-    error_scale: float = 1.0,
-    kinds: Sequence[str] = (),
-    progress: Callable[[str], None] | None = None,
+    count: int,
+    seed: int,
+    pulsing_s: float,
+    error_scale: float,
+    kinds: Sequence[str],
 ) -> Path:
-    """Write ``count`` labelled cases under ``out``; return the path of ``labels.json``.
+    """Write ``out/labels.json``: how the cases were made and each case's label.
 
     Args:
-        out: a new or empty directory; gets ``cases/NNN/{recording/,rig.yaml}`` and
-            ``labels.json``.
-        count: number of cases.
-        seed: seed of every draw (cases, strengths, parameter errors, sensor noise).
-        pulsing_s: seconds of 5 Hz pulsing per maximum pressure (5 s: 18 s recordings).
-        jobs: worker processes (the machine's cores, at most).
-        error_scale: multiplies the one-sigma tolerances the parameter errors are drawn from.
-        kinds: keep only cases of these kinds (null, single, pair, unexplained), numbered as
-            in the full schedule; ``count`` is then the number kept.
-        progress: called with each finished case's id.
+        out: the benchmark's directory (``cases/`` beside the file).
+        labels: :func:`make_case`'s label of each case, by case id.
+        count: number of cases asked for.
+        seed: seed of every draw.
+        pulsing_s: seconds of 5 Hz pulsing per maximum pressure.
+        error_scale: the parameter errors' scale of the rig tolerances.
+        kinds: the kinds kept (empty: every kind).
 
-    Raises:
-        FileExistsError: ``out`` holds files already.
+    Returns:
+        The path of ``labels.json``.
     """
-    out = Path(out)
-    if out.exists() and any(out.iterdir()):
-        raise FileExistsError(f"{out}: not empty; choose a new directory for the cases")
-    cases_dir = out / "cases"
-    cases_dir.mkdir(parents=True, exist_ok=True)
-    specs = select_cases(count, seed, kinds, error_scale=error_scale)
-    labels: dict[str, Any] = {}
-    work = [(spec, cases_dir, pulsing_s) for spec in specs]
-    if jobs > 1:
-        with ProcessPoolExecutor(max_workers=jobs) as pool:
-            for case_id, result in pool.map(_make_case_job, work):
-                labels[case_id] = result
-                if progress is not None:
-                    progress(case_id)
-    else:
-        for job in work:
-            case_id, result = _make_case_job(job)
-            labels[case_id] = result
-            if progress is not None:
-                progress(case_id)
     document = {
         "generator": {
             "tool": f"brake_hil {__version__} virtual rig",

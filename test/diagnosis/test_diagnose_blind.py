@@ -14,9 +14,9 @@ import shutil
 
 import pytest
 
+from brake_hil.app.benchmark import read_labels, run_cases, score
 from brake_hil.io.recording_writer import save_recording
 from brake_hil.physics.rig import Rig
-from brake_hil.scoring import read_labels, run_cases, score
 from brake_hil.virtual_rig.effects import make_effect
 from brake_hil.virtual_rig.excitation import seed_pulsing
 from brake_hil.virtual_rig.simulator import simulate_rig
@@ -57,7 +57,7 @@ def case_set(tmp_path_factory: pytest.TempPathFactory, default_rig: Rig) -> Path
 
 
 def test_blind_diagnosis_names_each_effect_and_passes_the_null(case_set: Path) -> None:
-    results = run_cases((case_set / "cases").iterdir(), workers=1)
+    results = run_cases((case_set / "cases").iterdir(), jobs=1)
     figures = score(results, read_labels(case_set / "labels.json"))
     by_case = {r.case: r for r in results}
     assert figures["errors"] == []

@@ -20,8 +20,8 @@ import rclpy
 from rclpy.context import Context
 from rclpy.node import Node
 
+from brake_hil.app.chain import ros_environment
 from brake_hil.nodes import common
-from brake_hil.nodes.chain import ros_environment
 from brake_hil.topics import TopicSpec
 
 

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from brake_hil.nodes.chain import run_can_chain
+from brake_hil.app.chain import run_can_chain
 from test.conftest import CONFIG
 from test.nodes.harness import unique_domain_id
 
@@ -25,7 +25,7 @@ def test_chain_over_can_predicts_every_sample_the_emulator_sent(tmp_path: Path) 
         tmp_path,
         pulsing_s=2.0,
         domain_id=unique_domain_id(),
-        echo=lines.append,
+        progress=lines.append,
     )
     assert result.exit_codes and all(code == 0 for code in result.exit_codes.values()), lines
     assert result.check is not None, lines

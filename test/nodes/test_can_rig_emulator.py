@@ -15,9 +15,9 @@ import time
 import numpy as np
 import pytest
 
+from brake_hil.app.chain import ros_environment
 from brake_hil.io.can_daq import CanDaq, DaqStatus, DecodedSample
 from brake_hil.nodes import common
-from brake_hil.nodes.chain import ros_environment
 from brake_hil.nodes.rig_emulator import precompute_run
 from brake_hil.physics.rig import load_rig
 

@@ -18,10 +18,10 @@ from typing import Any
 import numpy as np
 import pytest
 
+from brake_hil.app.chain import NodeProcess, node_available, start_node, stop_node
 from brake_hil.io.recording_reader import read_recording
 from brake_hil.live.model_file import load_model
 from brake_hil.nodes import common
-from brake_hil.nodes.chain import NodeProcess, node_available, start_node, stop_node
 from brake_hil.topics import MASTER_CYLINDER_PRESSURE, MEASURED_OUTPUTS, PREDICTED_OUTPUTS
 from test.conftest import CONFIG, PROJECT
 from test.nodes.harness import Collector, ros_domain, unique_domain_id

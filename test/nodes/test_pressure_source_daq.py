@@ -16,9 +16,9 @@ from typing import Any
 import numpy as np
 import pytest
 
+from brake_hil.app.chain import start_node, stop_node
 from brake_hil.io.can_daq import RigFrameCodec, SlcanPty
 from brake_hil.nodes import common
-from brake_hil.nodes.chain import start_node, stop_node
 from brake_hil.topics import BLOCK_FORCE, BORE_PRESSURE, CALIPER_DISPLACEMENT
 from brake_hil.topics import MASTER_CYLINDER_PRESSURE as P_I
 from test.nodes.harness import Collector, ros_domain, unique_domain_id

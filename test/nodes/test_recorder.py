@@ -28,9 +28,9 @@ from rclpy.context import Context
 from rclpy.node import Node
 import yaml
 
+from brake_hil.app.chain import ros_environment
 from brake_hil.io.recording_reader import read_recording
 from brake_hil.nodes import common
-from brake_hil.nodes.chain import ros_environment
 from brake_hil.topics import AIR_PRESSURE, MASTER_CYLINDER_PRESSURE, MEASURED_OUTPUTS
 
 SAMPLE_TOPICS = (MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS, AIR_PRESSURE)

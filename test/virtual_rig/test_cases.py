@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 
+from brake_hil.app.cases import generate_cases
 from brake_hil.io.recording_reader import read_recording
 from brake_hil.physics.rig import load_rig
 from brake_hil.virtual_rig import EFFECTS
@@ -15,7 +16,6 @@ from brake_hil.virtual_rig.cases import (
     STRONG_STRENGTHS,
     SUBTLE_STRENGTHS,
     case_excitation,
-    generate_cases,
     label,
     nominal_rigs,
     plan_cases,

@@ -1,8 +1,8 @@
-"""Score the diagnosis blind on labelled concealed-effect cases.
+"""``brake-hil benchmark``: score the diagnosis blind on labelled concealed-effect cases.
 
-This is the only module that reads labels. It hands the diagnosis each case's recording and
-nominal rig file (never the label, the case's name or its metadata), collects the verdicts,
-and only then opens the labels to score them:
+This is the only module of brake_hil that reads labels. It hands the diagnosis each case's
+recording and nominal rig file (never the label, the case's name or its metadata), collects
+the verdicts, and only then opens the labels to score them:
 
 * top-1 accuracy on single-effect cases (the verdict's first effect is the label) and how
   often the verdict is exactly the label;
@@ -12,18 +12,22 @@ and only then opens the labels to score them:
 * held-out NRMSE improvement on the mismatched channel (baseline / improved, the channel
   with the worst baseline NRMSE) on correctly diagnosed cases;
 * seconds per recording, and the confidence's reliability (accuracy per confidence bin).
+
+:func:`run_benchmark` is the command: the cases diagnosed over
+:func:`~brake_hil.app.parallel.parallel_map`, then scored; it prints nothing and returns a
+:class:`Benchmark`.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass, field
 import json
 from pathlib import Path
 import statistics
 import time
 
+from brake_hil.app.parallel import Outcome, parallel_map, values
 from brake_hil.diagnosis.diagnose import diagnose
 from brake_hil.errors import BrakeHilError
 from brake_hil.io.recording_reader import read_recording
@@ -76,24 +80,25 @@ def diagnose_case(case_dir: Path) -> CaseResult:
 
 def run_cases(
     case_dirs: Iterable[Path],
-    workers: int = 2,
+    jobs: int = 1,
     progress: Callable[[CaseResult], None] | None = None,
 ) -> list[CaseResult]:
-    """Diagnose every case, ``workers`` at a time."""
-    dirs = sorted(case_dirs)
-    results: list[CaseResult] = []
-    if workers <= 1:
-        for case_dir in dirs:
-            results.append(diagnose_case(case_dir))
-            if progress:
-                progress(results[-1])
-        return results
-    with ProcessPoolExecutor(max_workers=workers) as pool:
-        for result in pool.map(diagnose_case, dirs):
-            results.append(result)
-            if progress:
-                progress(result)
-    return results
+    """Diagnose every case (sorted by folder), ``jobs`` processes at a time.
+
+    Args:
+        case_dirs: case folders, each with ``recording/`` and ``rig.yaml``.
+        jobs: worker processes.
+        progress: called with each case's result, in the cases' order.
+
+    Returns:
+        One result per case, in order; a case whose input is refused carries its error.
+    """
+
+    def report(outcome: Outcome[CaseResult]) -> None:
+        if progress is not None and outcome.value is not None:
+            progress(outcome.value)
+
+    return values(parallel_map(diagnose_case, sorted(case_dirs), jobs, report))
 
 
 def read_labels(path: Path) -> dict[str, list[str]]:
@@ -180,3 +185,47 @@ def score(results: list[CaseResult], labels: dict[str, list[str]]) -> dict[str, 
         "errors": [r.case + ": " + r.error for r in results if r.error],
         "per_case": [{**asdict(r), "label": labels[r.case]} for r in results],
     }
+
+
+@dataclass(frozen=True)
+class Benchmark:
+    """What ``brake-hil benchmark`` found: every verdict, then the figures of :func:`score`."""
+
+    results: tuple[CaseResult, ...]
+    figures: dict[str, object]
+    json_path: Path | None  # where the figures were written
+
+
+def run_benchmark(
+    directory: Path,
+    jobs: int = 1,
+    json_path: Path | None = None,
+    progress: Callable[[CaseResult], None] | None = None,
+) -> Benchmark:
+    """``brake-hil benchmark``: the diagnosis blind on ``DIR/cases``, scored on
+    ``DIR/labels.json`` only after every verdict is in.
+
+    Args:
+        directory: made by ``brake-hil cases`` (``cases/NNN/`` and ``labels.json``).
+        jobs: worker processes.
+        json_path: write the figures here as JSON (``None``: nowhere).
+        progress: called with each case's result, in the cases' order.
+
+    Returns:
+        The verdicts and the figures.
+
+    Raises:
+        BrakeHilError: no cases, no labels, or labels that cannot be read.
+    """
+    cases = sorted(p for p in (directory / "cases").glob("*") if p.is_dir())
+    if not cases:
+        raise BrakeHilError(f"{directory}: no cases under {directory / 'cases'}")
+    labels_path = directory / "labels.json"
+    if not labels_path.exists():
+        raise BrakeHilError(f"{labels_path}: no labels to score against")
+    results = run_cases(cases, jobs, progress)
+    figures = score(results, read_labels(labels_path))
+    if json_path is not None:
+        json_path.parent.mkdir(parents=True, exist_ok=True)
+        json_path.write_text(json.dumps(figures, indent=2) + "\n", encoding="utf-8")
+    return Benchmark(tuple(results), figures, json_path)

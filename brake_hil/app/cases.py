@@ -1,0 +1,138 @@
+"""``brake-hil cases``: the concealed-effect benchmark set, simulated in parallel.
+
+:mod:`brake_hil.virtual_rig.cases` describes the cases and simulates one;
+:func:`generate_cases` maps that over the described cases with
+:func:`~brake_hil.app.parallel.parallel_map` and writes the labels apart from the recordings.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from functools import partial
+from pathlib import Path
+from typing import Any
+
+from brake_hil.app.parallel import Outcome, parallel_map, values
+from brake_hil.errors import BrakeHilError
+from brake_hil.virtual_rig.cases import make_case, select_cases, write_labels
+
+__all__ = ["CasesResult", "generate_cases", "run_cases"]
+
+
+def generate_cases(
+    out: Path | str,
+    count: int,
+    seed: int = 0,
+    *,
+    pulsing_s: float = 5.0,
+    jobs: int = 1,
+    error_scale: float = 1.0,
+    kinds: Sequence[str] = (),
+    progress: Callable[[int, int], None] | None = None,
+) -> Path:
+    """Write ``count`` labelled cases under ``out``; return the path of ``labels.json``.
+
+    Args:
+        out: a new or empty directory; gets ``cases/NNN/{recording/,rig.yaml}`` and
+            ``labels.json``.
+        count: number of cases.
+        seed: seed of every draw (cases, strengths, parameter errors, sensor noise).
+        pulsing_s: seconds of 5 Hz pulsing per maximum pressure (5 s: 18 s recordings).
+        jobs: worker processes (the machine's cores, at most).
+        error_scale: multiplies the one-sigma tolerances the parameter errors are drawn from.
+        kinds: keep only cases of these kinds (null, single, pair, unexplained), numbered as
+            in the full schedule; ``count`` is then the number kept.
+        progress: called with the number of cases written and the number in all: once
+            before the first is simulated, then as each finishes (in the cases' order).
+
+    Raises:
+        FileExistsError: ``out`` holds files already.
+        BrakeHilError: a case could not be simulated (the first such, after every case ran;
+            no ``labels.json`` is written then).
+    """
+    out = Path(out)
+    if out.exists() and any(out.iterdir()):
+        raise FileExistsError(f"{out}: not empty; choose a new directory for the cases")
+    cases_dir = out / "cases"
+    cases_dir.mkdir(parents=True, exist_ok=True)
+    specs = select_cases(count, seed, kinds, error_scale=error_scale)
+
+    written = 0
+
+    def report(outcome: Outcome[dict[str, Any]]) -> None:
+        nonlocal written
+        written += 1 if outcome.ok else 0
+        if progress is not None:
+            progress(written, len(specs))
+
+    if progress is not None:
+        progress(0, len(specs))
+    simulate = partial(make_case, cases_dir=cases_dir, pulsing_s=pulsing_s)
+    made = values(parallel_map(simulate, specs, jobs, report))
+    labels = {spec.case_id: label for spec, label in zip(specs, made)}
+    return write_labels(
+        out,
+        labels,
+        count=count,
+        seed=seed,
+        pulsing_s=pulsing_s,
+        error_scale=error_scale,
+        kinds=kinds,
+    )
+
+
+@dataclass(frozen=True)
+class CasesResult:
+    """The benchmark set written."""
+
+    count: int
+    cases_dir: Path  # DIR/cases, one folder per case
+    labels_path: Path  # DIR/labels.json
+
+
+def run_cases(
+    out: Path,
+    count: int,
+    seed: int = 0,
+    *,
+    pulsing_s: float = 5.0,
+    jobs: int = 1,
+    error_scale: float = 1.0,
+    kinds: Sequence[str] = (),
+    progress: Callable[[int, int], None] | None = None,
+) -> CasesResult:
+    """``brake-hil cases``: check the options, then :func:`generate_cases`.
+
+    Args:
+        out: a new or empty directory.
+        count: number of cases (at least 1).
+        seed: seed of every draw.
+        pulsing_s: seconds of 5 Hz pulsing per maximum pressure (above 0).
+        jobs: worker processes (at least 1).
+        error_scale: multiplies the one-sigma tolerances of the parameter errors.
+        kinds: keep only cases of these kinds (empty: every kind).
+        progress: called with the cases written and the cases in all (see
+            :func:`generate_cases`).
+
+    Returns:
+        Where the cases and the labels are.
+
+    Raises:
+        BrakeHilError: a bad option, or ``out`` is not a new or empty directory.
+    """
+    if count < 1 or jobs < 1 or pulsing_s <= 0.0:
+        raise BrakeHilError("cases: --count and --jobs must be >= 1, --pulsing-seconds > 0")
+    if out.exists() and (not out.is_dir() or any(out.iterdir())):
+        raise BrakeHilError(f"{out}: not empty; choose a new directory for the cases")
+    labels = generate_cases(
+        out,
+        count,
+        seed,
+        pulsing_s=pulsing_s,
+        jobs=jobs,
+        error_scale=error_scale,
+        kinds=kinds,
+        progress=progress,
+    )
+    return CasesResult(count, out / "cases", labels)

@@ -1,0 +1,489 @@
+"""The node chain as separate processes: source -> caliper model -> comparator -> recorder.
+
+What ``ros2 launch`` would do, without a ROS install: each node is started as
+``python -m brake_hil.nodes.<name> --ros-args --params-file <file>`` with
+``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` and one ``ROS_DOMAIN_ID`` for the run, in its own
+session (a Ctrl-C reaches the launcher only, which then stops the nodes in order). The
+source replays the recording once and exits (``exit_at_end``) after waiting for the model,
+comparator and recorder to subscribe; the launcher then gives the model and comparator a
+moment to finish, and stops them and the recorder with SIGINT. :func:`run_chain` returns the
+comparator's run summary, the model's timing, where the MCAP is, and the recorded predictions
+checked against the batch model on the recorded input; it prints nothing (the command line,
+``python -m brake_hil.nodes.chain``, is :mod:`brake_hil.cli.chain`).
+
+This module imports no rclpy: the nodes run in their own processes. The recorder is
+optional: without ``brake_hil/nodes/recorder.py`` the chain runs without it and says so.
+Node logs go to ``DIR/logs/``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+import importlib.util
+import json
+import os
+from pathlib import Path
+import signal
+import subprocess
+import sys
+import time
+from typing import Any
+
+import numpy as np
+import yaml
+
+from brake_hil.errors import BrakeHilError
+from brake_hil.io.recording_reader import list_topics, read_recording
+from brake_hil.live.model_file import load_model
+from brake_hil.runtime import set_realtime_priority
+from brake_hil.topics import (
+    MASTER_CYLINDER_PRESSURE,
+    MEASURED_OUTPUTS,
+    OUTPUT_CHANNELS,
+    PREDICTED_OUTPUTS,
+)
+
+__all__ = [
+    "DEFAULT_MODEL",
+    "DEFAULT_RECORDING",
+    "PROJECT",
+    "ChainResult",
+    "NodeProcess",
+    "Notice",
+    "check_recorded_predictions",
+    "choose_domain_id",
+    "node_available",
+    "ros_environment",
+    "run_can_chain",
+    "run_chain",
+    "start_node",
+    "stop_node",
+]
+
+PROJECT = Path(__file__).resolve().parents[2]
+DEFAULT_RECORDING = PROJECT / "bags" / "one_washer_lti"
+DEFAULT_MODEL = PROJECT / "config" / "rig_default.yaml"
+
+
+def ros_environment(domain_id: int | None = None) -> dict[str, str]:
+    """The environment of a node process: loopback discovery, the run's domain."""
+    env = dict(os.environ)
+    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    env["ROS_DOMAIN_ID"] = str(choose_domain_id() if domain_id is None else domain_id)
+    env["PYTHONUNBUFFERED"] = "1"
+    return env
+
+
+def choose_domain_id() -> int:
+    """A domain id (1-100) unlikely to be shared with another run on this host."""
+    return 1 + (os.getpid() * 7919 + time.time_ns() // 1_000_000) % 100
+
+
+def node_available(name: str) -> bool:
+    """True when ``brake_hil.nodes.<name>`` exists."""
+    return importlib.util.find_spec(f"brake_hil.nodes.{name}") is not None
+
+
+@dataclass
+class NodeProcess:
+    """One running node."""
+
+    name: str
+    process: subprocess.Popen[bytes]
+    log: Path
+
+    def returncode(self) -> int | None:
+        """Exit status, None while running."""
+        return self.process.poll()
+
+    def cpu_seconds(self) -> float | None:
+        """User plus system CPU time so far (s), None once it has exited (Linux /proc)."""
+        try:
+            fields = Path(f"/proc/{self.process.pid}/stat").read_text().rsplit(")", 1)[1].split()
+        except (OSError, IndexError):
+            return None
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def start_node(
+    name: str,
+    parameters: Mapping[str, Any],
+    env: Mapping[str, str],
+    workdir: Path,
+    fifo_priority: int = 0,
+) -> NodeProcess:
+    """Start ``brake_hil.nodes.<name>`` with ``parameters`` (written to a params file).
+
+    ``fifo_priority`` > 0 starts the whole process under ``SCHED_FIFO`` at that priority (as
+    ``chrt -f`` would; needs CAP_SYS_NICE, else the node runs normally).
+    """
+    workdir.mkdir(parents=True, exist_ok=True)
+    params = workdir / f"{name}.params.yaml"
+    params.write_text(
+        yaml.safe_dump({name: {"ros__parameters": dict(parameters)}}), encoding="utf-8"
+    )
+    log = workdir / f"{name}.log"
+    command = [
+        sys.executable,
+        "-m",
+        f"brake_hil.nodes.{name}",
+        "--ros-args",
+        "--params-file",
+        str(params),
+    ]
+    with log.open("wb") as stream:
+        process = subprocess.Popen(
+            command,
+            env=dict(env),
+            stdout=stream,
+            stderr=subprocess.STDOUT,
+            start_new_session=True,
+            preexec_fn=(lambda: set_realtime_priority(fifo_priority)) if fifo_priority else None,
+        )
+    return NodeProcess(name, process, log)
+
+
+def stop_node(node: NodeProcess, timeout_s: float = 10.0) -> int:
+    """SIGINT, then SIGTERM, then SIGKILL, each after ``timeout_s``; the exit status."""
+    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGKILL):
+        if node.process.poll() is not None:
+            break
+        node.process.send_signal(sig)
+        try:
+            node.process.wait(timeout_s)
+        except subprocess.TimeoutExpired:
+            continue
+    return node.process.wait()
+
+
+@dataclass(frozen=True)
+class ChainResult:
+    """What a chain run produced."""
+
+    out_dir: Path
+    comparator: dict[str, Any] | None = None  # comparator summary
+    model: dict[str, Any] | None = None  # caliper model timing statistics
+    bag: Path | None = None  # the recorder's MCAP directory
+    check: dict[str, float] | None = None  # recorded predictions against the batch model
+    missing: tuple[str, ...] = ()  # nodes not available
+    exit_codes: dict[str, int] = field(default_factory=dict)
+    cpu_s: dict[str, float] = field(default_factory=dict)  # CPU time of each node (s)
+    wall_s: float = 0.0  # from the source's start to the stop (s)
+    logs: Path | None = None  # the nodes' log files
+
+    @property
+    def failed(self) -> dict[str, int]:
+        """Nodes that exited with a non-zero status, and the status."""
+        return {name: code for name, code in self.exit_codes.items() if code != 0}
+
+
+Notice = Callable[[str], None]
+"""Called with a one-line notice while the chain runs (what it starts, what went wrong)."""
+
+
+@dataclass
+class _Stops:
+    """What stopping the nodes measured (filled as each node stops)."""
+
+    exit_codes: dict[str, int] = field(default_factory=dict)
+    cpu_s: dict[str, float] = field(default_factory=dict)
+
+
+def _ignore(message: str) -> None:
+    """A notice nobody reads."""
+
+
+def run_chain(
+    recording: Path,
+    model_file: Path = DEFAULT_MODEL,
+    out_dir: Path = PROJECT / "out" / "chain",
+    rate: float = 1.0,
+    domain_id: int | None = None,
+    progress: Notice | None = None,
+    recorder: bool = True,
+    realtime_priority: int = 0,
+) -> ChainResult:
+    """Run the chain on ``recording`` once; see the module docstring.
+
+    Args:
+        recording: the recording the source replays (``p_i`` and the measured outputs).
+        model_file: the caliper model's model file (rig YAML or ``improved_model.json``).
+        out_dir: summaries, the MCAP and ``logs/`` go here.
+        rate: replay rate factor.
+        domain_id: ``ROS_DOMAIN_ID`` of the run (``None``: one chosen for it).
+        progress: called with each notice while the chain runs.
+        recorder: record the run to MCAP (when the recorder node exists).
+        realtime_priority: ``SCHED_FIFO`` priority of the source's and the model's loop
+            threads (0: none).
+
+    Returns:
+        What the nodes left: summaries, exit codes, CPU times, the checked recording.
+
+    Raises:
+        BrakeHilError: a bad recording or model file (before any node starts).
+    """
+    say = progress or _ignore
+    source = read_recording(recording, required=(MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS))
+    mean_pressure = float(np.mean(source.master_cylinder_pressure))
+    load_model(model_file, mean_pressure)  # a bad model file fails here, with one line
+    length_s = float(source.time[-1])
+    env = ros_environment(domain_id)
+    logs = out_dir / "logs"
+    missing: tuple[str, ...] = ()
+    has_recorder = recorder and node_available("recorder")
+    if recorder and not has_recorder:
+        missing = ("recorder",)
+        say("recorder node not available: running without recording")
+    bag_name = "chain_" + datetime.now(UTC).strftime("%Y_%m_%d-%H_%M_%S")
+    subscribers = 2 if has_recorder else 1
+    nodes: list[NodeProcess] = []
+    stops = _Stops()
+    wall_s = 0.0
+    say(
+        f"chain on {recording} ({length_s:.1f} s at rate {rate:g}), model {model_file}, "
+        f"ROS_DOMAIN_ID {env['ROS_DOMAIN_ID']}"
+    )
+    try:
+        if has_recorder:
+            nodes.append(
+                start_node(
+                    "recorder", {"output_dir": str(out_dir), "bag_name": bag_name}, env, logs
+                )
+            )
+        nodes.append(
+            start_node("comparator", {"summary_file": str(out_dir / "comparator.json")}, env, logs)
+        )
+        model_parameters = {
+            "model_file": str(model_file),
+            "mean_pressure": mean_pressure,
+            "statistics_file": str(out_dir / "caliper_model.json"),
+            "realtime_priority": realtime_priority,
+        }
+        nodes.append(start_node("caliper_model", model_parameters, env, logs))
+        source_parameters = {
+            "recording": str(recording),
+            "rate": float(rate),
+            "exit_at_end": True,
+            "wait_for_subscribers": subscribers,
+            "wait_for_topics": [f"{spec.name}:{subscribers}" for spec in PREDICTED_OUTPUTS],
+            "wait_timeout": 30.0,
+            "start_delay": 1.0,
+            "realtime_priority": realtime_priority,
+        }
+        player = start_node("pressure_source", source_parameters, env, logs)
+        nodes.append(player)
+        started = time.monotonic()
+        try:
+            player.process.wait(length_s / rate + 45.0)
+        except subprocess.TimeoutExpired:
+            say("pressure_source did not finish in time: stopping it")
+        time.sleep(1.0)  # the model drains, the comparator scores its last cycle
+        wall_s = time.monotonic() - started
+    finally:
+        _stop_all(nodes, stops)
+    return _collect(
+        out_dir,
+        stops,
+        wall_s,
+        missing,
+        logs,
+        bag_name if has_recorder else None,
+        model_file,
+        mean_pressure,
+        say,
+    )
+
+
+def _stop_all(nodes: list[NodeProcess], stops: _Stops) -> None:
+    """Stop the nodes, last started first (source, model, comparator, recorder)."""
+    for node in reversed(nodes):
+        cpu = node.cpu_seconds()
+        if cpu is not None:
+            stops.cpu_s[node.name] = cpu
+        if node.name == "recorder":
+            time.sleep(1.0)  # let it write what it has queued
+        stops.exit_codes[node.name] = stop_node(node)
+
+
+def _collect(
+    out_dir: Path,
+    stops: _Stops,
+    wall_s: float,
+    missing: tuple[str, ...],
+    logs: Path,
+    bag_name: str | None,
+    model_file: Path,
+    mean_pressure: float,
+    say: Notice,
+) -> ChainResult:
+    """Read what the nodes left (summaries, the bag) and check the bag."""
+    failed = {name: code for name, code in stops.exit_codes.items() if code != 0}
+    if failed:
+        say(f"nodes exited with errors: {failed}; logs in {logs}")
+    bag = None
+    check = None
+    if bag_name is not None and (out_dir / bag_name / "metadata.yaml").is_file():
+        bag = out_dir / bag_name
+        try:
+            check = check_recorded_predictions(bag, model_file, mean_pressure)
+        except BrakeHilError as err:
+            say(f"the recording cannot be checked: {err}")
+    return ChainResult(
+        out_dir=out_dir,
+        comparator=_read_json(out_dir / "comparator.json"),
+        model=_read_json(out_dir / "caliper_model.json"),
+        bag=bag,
+        check=check,
+        missing=missing,
+        exit_codes=stops.exit_codes,
+        cpu_s=stops.cpu_s,
+        wall_s=wall_s,
+        logs=logs,
+    )
+
+
+def run_can_chain(
+    rig_file: Path = DEFAULT_MODEL,
+    effects: Sequence[str] = (),
+    model_file: Path = DEFAULT_MODEL,
+    out_dir: Path = PROJECT / "out" / "chain_can",
+    pulsing_s: float = 5.0,
+    domain_id: int | None = None,
+    progress: Notice | None = None,
+) -> ChainResult:
+    """The chain against the rig emulator over CAN, without hardware.
+
+    rig_emulator plays a virtual-rig run of ``rig_file`` (with ``effects``) in real time as
+    the DBC's CAN frames on an slcan pseudo-terminal; pressure_source reads them as a DAQ
+    (mode ``can``) and publishes the measured topics; then model, comparator and recorder as
+    in :func:`run_chain`.
+
+    Args:
+        rig_file: the truth rig the emulator simulates.
+        effects: virtual-rig effects, ``NAME[=STRENGTH]`` each.
+        model_file: the caliper model's model file.
+        out_dir: summaries, the MCAP, the slcan link and ``logs/`` go here.
+        pulsing_s: seconds of 5 Hz pulsing the emulator plays.
+        domain_id: ``ROS_DOMAIN_ID`` of the run (``None``: one chosen for it).
+        progress: called with each notice while the chain runs.
+
+    Returns:
+        What the nodes left, as :func:`run_chain`.
+
+    Raises:
+        BrakeHilError: a bad model file (before any node starts).
+    """
+    say = progress or _ignore
+    load_model(model_file, 1.0e6)  # a bad model file fails here, with one line
+    env = ros_environment(domain_id)
+    logs = out_dir / "logs"
+    bag_name = "chain_can_" + datetime.now(UTC).strftime("%Y_%m_%d-%H_%M_%S")
+    link = out_dir / "rig_can"
+    out_dir.mkdir(parents=True, exist_ok=True)
+    link.unlink(missing_ok=True)
+    max_pressure = 1.38e6
+    mean_pressure = max_pressure * (1.0 - 0.22)  # the emulator's pulsing mean (excitation.py)
+    nodes: list[NodeProcess] = []
+    stops = _Stops()
+    wall_s = 0.0
+    say(
+        f"chain over CAN: rig_emulator ({rig_file}, effects {list(effects) or 'none'}) -> "
+        f"slcan {link} -> pressure_source -> model {model_file}, "
+        f"ROS_DOMAIN_ID {env['ROS_DOMAIN_ID']}"
+    )
+    try:
+        nodes.append(
+            start_node("recorder", {"output_dir": str(out_dir), "bag_name": bag_name}, env, logs)
+        )
+        nodes.append(
+            start_node("comparator", {"summary_file": str(out_dir / "comparator.json")}, env, logs)
+        )
+        nodes.append(
+            start_node(
+                "caliper_model",
+                {
+                    "model_file": str(model_file),
+                    "mean_pressure": mean_pressure,
+                    "statistics_file": str(out_dir / "caliper_model.json"),
+                },
+                env,
+                logs,
+            )
+        )
+        emulator = start_node(
+            "rig_emulator",
+            {
+                "rig_file": str(rig_file),
+                "effects": list(effects) or [""],
+                "max_pressures": [max_pressure],
+                "pulsing_s": pulsing_s,
+                "loop": False,
+                "output": "can",
+                "can_link_path": str(link),
+                "start_delay_s": 3.0,
+            },
+            env,
+            logs,
+        )
+        nodes.append(emulator)
+        nodes.append(
+            start_node(
+                "pressure_source",
+                {
+                    "mode": "can",
+                    "can_interface": "slcan",
+                    "can_channel": str(link),
+                    "can_bitrate": 1_000_000,
+                },
+                env,
+                logs,
+            )
+        )
+        started = time.monotonic()
+        try:
+            emulator.process.wait(pulsing_s + 120.0)
+        except subprocess.TimeoutExpired:
+            say("rig_emulator did not finish in time: stopping it")
+        time.sleep(1.0)
+        wall_s = time.monotonic() - started
+    finally:
+        _stop_all(nodes, stops)
+    return _collect(out_dir, stops, wall_s, (), logs, bag_name, model_file, mean_pressure, say)
+
+
+def _read_json(path: Path) -> dict[str, Any] | None:
+    try:
+        document = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return document if isinstance(document, dict) else None
+
+
+def check_recorded_predictions(
+    bag: Path, model_file: Path, mean_pressure: float
+) -> dict[str, float]:
+    """Recorded predictions against the batch model on the recorded ``p_i``.
+
+    Returns the input and prediction counts and, per channel, the largest deviation over the
+    batch output's peak-to-peak (float rounding: ~1e-13).
+    """
+    recorded = read_recording(bag, required=(MASTER_CYLINDER_PRESSURE, *PREDICTED_OUTPUTS))
+    topics = {t.name: t for t in list_topics(bag)}
+    batch = load_model(model_file, mean_pressure).batch(recorded.master_cylinder_pressure)
+    predicted = (
+        recorded.predicted_bore_pressure,
+        recorded.predicted_block_force,
+        recorded.predicted_caliper_displacement,
+    )
+    check: dict[str, float] = {
+        "inputs": float(topics[MASTER_CYLINDER_PRESSURE.name].message_count),
+        "predictions": float(topics[PREDICTED_OUTPUTS[0].name].message_count),
+    }
+    if check["inputs"] != check["predictions"]:
+        return check  # samples missing from the recording: no sample-for-sample comparison
+    for channel, live, offline in zip(OUTPUT_CHANNELS, predicted, batch):
+        assert live is not None
+        check[f"max_dev_{channel}"] = float(np.max(np.abs(live - offline)) / np.ptp(offline))
+    return check

@@ -1,0 +1,62 @@
+"""``brake-hil compare``: the rig file's LTI model against a recording (seed Tables 4-5)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from brake_hil.analysis.comparison import Comparison, compare
+from brake_hil.app.output import write_json
+from brake_hil.io.recording_reader import read_recording
+from brake_hil.physics.rig import Rig, load_rig
+from brake_hil.topics import MASTER_CYLINDER_PRESSURE, MEASURED_OUTPUTS
+
+__all__ = ["CompareResult", "run_compare"]
+
+
+@dataclass(frozen=True)
+class CompareResult:
+    """The comparison and the files it was written to."""
+
+    recording_path: Path
+    rig_path: Path
+    rig: Rig
+    comparison: Comparison
+    document: dict[str, object]  # what the JSON file holds
+    json_path: Path | None
+    plot_path: Path | None
+
+
+def run_compare(
+    recording_path: Path,
+    rig_path: Path,
+    json_path: Path | None = None,
+    plot_path: Path | None = None,
+) -> CompareResult:
+    """Run the rig's LTI model on the recording's ``p_i`` and score it on each steady segment.
+
+    Args:
+        recording_path: a recording with ``p_i`` and the three measured outputs.
+        rig_path: the rig YAML.
+        json_path: write the comparison here as JSON (``None``: nowhere).
+        plot_path: write a PNG of measured against predicted here (``None``: no plot).
+
+    Returns:
+        The comparison.
+
+    Raises:
+        BrakeHilError: a bad rig file or recording, or no steady pulsing (the message names
+            the file).
+    """
+    rig = load_rig(rig_path)
+    recording = read_recording(
+        recording_path, required=(MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS)
+    )
+    comparison = compare(recording, rig)
+    document = {"recording": str(recording_path), "rig": str(rig_path), **comparison.as_dict()}
+    if plot_path is not None:
+        from brake_hil.report.plots import plot_comparison
+
+        plot_comparison(comparison, plot_path, f"{recording_path.name}: {rig.name}")
+    write_json(json_path, document)
+    return CompareResult(recording_path, rig_path, rig, comparison, document, json_path, plot_path)

@@ -1,0 +1,59 @@
+"""``brake-hil diagnose``: find, name and model the physics the LTI model left out."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from brake_hil.app.output import write_json
+from brake_hil.diagnosis.diagnose import Diagnosis, Progress, diagnose
+from brake_hil.io.recording_reader import read_recording
+from brake_hil.physics.rig import load_rig
+from brake_hil.topics import MASTER_CYLINDER_PRESSURE, MEASURED_OUTPUTS
+
+__all__ = ["DIAGNOSIS_STEPS", "DiagnoseResult", "run_diagnose"]
+
+DIAGNOSIS_STEPS = 16
+"""About how many times :func:`~brake_hil.diagnosis.diagnose.diagnose` reports progress."""
+
+
+@dataclass(frozen=True)
+class DiagnoseResult:
+    """The diagnosis and the files written for it."""
+
+    diagnosis: Diagnosis
+    json_path: Path  # diagnosis.json
+    improved_model_path: Path  # improved_model.json, which the caliper-model node loads
+    report_path: Path  # report.html, its figures beside it
+
+
+def run_diagnose(
+    recording_path: Path, rig_path: Path, out: Path, progress: Progress | None = None
+) -> DiagnoseResult:
+    """Diagnose the recording against the rig file; write its JSON, model and report.
+
+    Args:
+        recording_path: a recording with ``p_i`` and the three measured outputs.
+        rig_path: the nominal rig YAML (what the test engineer believes).
+        out: folder for ``diagnosis.json``, ``improved_model.json`` and ``report.html``.
+        progress: called with a message at each step (about :data:`DIAGNOSIS_STEPS`).
+
+    Returns:
+        The diagnosis and the paths of the files written.
+
+    Raises:
+        BrakeHilError: a bad rig file or recording (the message names the file).
+    """
+    from brake_hil.report.diagnosis_report import write_report
+
+    rig = load_rig(rig_path)
+    recording = read_recording(
+        recording_path, required=(MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS)
+    )
+    diagnosis = diagnose(recording, rig, progress)
+    out.mkdir(parents=True, exist_ok=True)
+    json_path = out / "diagnosis.json"
+    write_json(json_path, diagnosis.as_dict())
+    improved = diagnosis.improved_model(rig_path).save(out / "improved_model.json")
+    page = write_report(diagnosis, out)
+    return DiagnoseResult(diagnosis, json_path, improved, page)

@@ -1,0 +1,151 @@
+"""The command line of the node-chain launcher: ``python -m brake_hil.nodes.chain``.
+
+Parses the options, runs :func:`brake_hil.app.chain.run_chain` (or
+:func:`~brake_hil.app.chain.run_can_chain` with ``--can-emulator``), prints its notices as
+they come and then the comparator's run summary, the model's timing and where the MCAP is.
+Exit status: 0, 1 when a node exited with an error, 2 on bad input (one line on stderr).
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Sequence
+from pathlib import Path
+import sys
+
+from brake_hil.app.chain import (
+    DEFAULT_MODEL,
+    DEFAULT_RECORDING,
+    PROJECT,
+    ChainResult,
+    run_can_chain,
+    run_chain,
+)
+from brake_hil.errors import BrakeHilError
+from brake_hil.topics import OUTPUT_CHANNELS
+
+__all__ = ["build_parser", "main", "result_lines"]
+
+DESCRIPTION = (
+    "The node chain as separate processes: source -> caliper model -> comparator -> recorder."
+)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the launcher."""
+    parser = argparse.ArgumentParser(description=DESCRIPTION)
+    parser.add_argument("recording", type=Path, nargs="?", default=DEFAULT_RECORDING)
+    parser.add_argument("--model", type=Path, default=DEFAULT_MODEL, help="model file (rig YAML)")
+    parser.add_argument("--out", type=Path, default=PROJECT / "out" / "chain")
+    parser.add_argument("--rate", type=float, default=1.0, help="replay rate factor")
+    parser.add_argument("--domain-id", type=int, default=None)
+    parser.add_argument("--no-recorder", action="store_true", help="run without the recorder")
+    parser.add_argument(
+        "--realtime-priority",
+        type=int,
+        default=0,
+        help="SCHED_FIFO priority of the source's and the model's loop threads (0: none)",
+    )
+    parser.add_argument(
+        "--can-emulator",
+        action="store_true",
+        help="instead of replaying RECORDING, run against the rig emulator over CAN (slcan pty)",
+    )
+    parser.add_argument(
+        "--effect",
+        action="append",
+        default=[],
+        help="with --can-emulator: a virtual-rig effect, NAME[=STRENGTH]",
+    )
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m brake_hil.nodes.chain``; returns the exit status."""
+    args = build_parser().parse_args(argv)
+    try:
+        if args.can_emulator:
+            out = (
+                args.out
+                if args.out != PROJECT / "out" / "chain"
+                else PROJECT / "out" / "chain_can"
+            )
+            result = run_can_chain(
+                args.model, args.effect, args.model, out, domain_id=args.domain_id, progress=print
+            )
+        else:
+            result = run_chain(
+                args.recording,
+                args.model,
+                args.out,
+                args.rate,
+                args.domain_id,
+                progress=print,
+                recorder=not args.no_recorder,
+                realtime_priority=args.realtime_priority,
+            )
+    except BrakeHilError as err:
+        print(f"chain: error: {err}", file=sys.stderr)
+        return 2
+    for line in result_lines(result):
+        print(line)
+    return 1 if result.failed else 0
+
+
+def result_lines(result: ChainResult) -> list[str]:
+    """What the launcher prints after a run: comparison, model timing, CPU, the MCAP."""
+    lines: list[str] = []
+    comparator = result.comparator
+    if comparator is None:
+        lines.append("no comparator summary")
+    else:
+        window = comparator["window_cycles"]
+        lines.append(
+            f"comparison (comparator: means over steady cycles, window of {window} cycles)"
+        )
+        lines.append(
+            f"{'channel':8s}{'ptp ratio %':>13s}{'tau/T %':>10s}{'NRMSE':>9s}{'cycles':>8s}  level"
+        )
+        for channel, entry in comparator["metrics"].items():
+            if entry.get("cycles"):
+                lines.append(
+                    f"{channel:8s}{entry['ptp_ratio_pct']:13.1f}{entry['tau_over_T_pct']:10.2f}"
+                    f"{entry['nrmse']:9.4f}{entry['cycles']:8d}  {entry['level']}"
+                )
+            else:
+                lines.append(f"{channel:8s}  no steady cycle scored")
+    model = result.model
+    if model is not None:
+        counters = model["counters"]
+        period, latency = model["period_error"], model["latency"]
+        lines.append(
+            f"caliper_model: {counters['samples']} samples in, {counters['predictions']} "
+            f"predictions out; period error median {period['median_us']:.0f} us, p99 "
+            f"{period['p99_us']:.0f} us, max {period['max_us']:.0f} us; latency median "
+            f"{latency['median_us']:.0f} us, p99 {latency['p99_us']:.0f} us; "
+            f"{counters['overruns']} overruns"
+        )
+    if result.cpu_s:
+        lines.append(
+            "CPU time (s) per node: "
+            + ", ".join(f"{name} {seconds:.1f}" for name, seconds in result.cpu_s.items())
+        )
+    if result.bag is not None:
+        lines.append(f"MCAP recording: {result.bag}")
+        check = result.check
+        if check is not None:
+            counts = (
+                f"recorded {int(check['inputs'])} inputs, {int(check['predictions'])} predictions"
+            )
+            if "max_dev_p_b" in check:
+                deviations = ", ".join(f"{c} {check[f'max_dev_{c}']:.1e}" for c in OUTPUT_CHANNELS)
+                lines.append(
+                    f"{counts}; largest deviation from the batch model (of ptp): {deviations}"
+                )
+            else:
+                lines.append(
+                    f"{counts}: the recording misses samples, no comparison with the batch"
+                )
+    elif "recorder" in result.missing:
+        lines.append("no MCAP: the recorder node is not available")
+    return lines

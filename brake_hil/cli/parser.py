@@ -1,0 +1,136 @@
+"""The argument parser of ``brake-hil``: every sub-command, its options and their help."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from brake_hil.app.simulate import EXCITATIONS
+from brake_hil.errors import BrakeHilError
+from brake_hil.virtual_rig.effects import EFFECTS
+from brake_hil.virtual_rig.simulator import RELATIVE_TOLERANCE, SOLVER_METHOD
+
+__all__ = ["build_parser", "uses_virtual_rig"]
+
+_VIRTUAL_OPTIONS = ("effect", "excitation", "nominal", "rig_out", "method", "rtol")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of ``brake-hil``."""
+    parser = argparse.ArgumentParser(
+        prog="brake-hil", description="Hardware-in-the-loop tools for hydraulic disk brakes."
+    )
+    commands = parser.add_subparsers(dest="command", required=True)
+    cmp = commands.add_parser("compare", help="run the rig's LTI model on a recording")
+    cmp.add_argument("recording", type=Path)
+    cmp.add_argument("--rig", type=Path, required=True)
+    cmp.add_argument("--json", type=Path)
+    cmp.add_argument("--plot", type=Path, help="PNG of measured vs predicted")
+    chz = commands.add_parser("characterize", help="the seed's Table 3 from a recording")
+    chz.add_argument("recording", type=Path)
+    chz.add_argument("--rig", type=Path, required=True)
+    chz.add_argument("--json", type=Path)
+    dgn = commands.add_parser("diagnose", help="find and model the physics the model left out")
+    dgn.add_argument("recording", type=Path)
+    dgn.add_argument("--rig", type=Path, required=True)
+    dgn.add_argument("--out", type=Path, required=True, help="folder for diagnosis.json etc.")
+    sim = commands.add_parser(
+        "simulate", help="write a recording of the LTI model or of the virtual rig"
+    )
+    sim.add_argument("--rig", type=Path, required=True, help="the rig to simulate (truth)")
+    sim.add_argument("--out", type=Path, required=True, help="new rosbag2 directory")
+    sim.add_argument(
+        "--max-pressure",
+        type=float,
+        nargs="+",
+        default=[1.38e6],
+        help="maximum master-cylinder pressures, Pa (one segment each)",
+    )
+    sim.add_argument("--pulsing-seconds", type=float, default=5.0)
+    sim.add_argument("--seed", type=int, default=0)
+    _add_virtual_rig_arguments(sim)
+    _add_cases_parser(commands)
+    bench = commands.add_parser("benchmark", help="score the diagnosis blind on labelled cases")
+    bench.add_argument("directory", type=Path, help="made by 'brake-hil cases'")
+    bench.add_argument("--jobs", type=int, default=1)
+    bench.add_argument("--json", type=Path)
+    reg = commands.add_parser("regress", help="replay recordings through the model vs a baseline")
+    reg.add_argument("recordings", type=Path, nargs="+")
+    reg.add_argument("--baseline", type=Path, required=True, help="baseline JSON")
+    reg.add_argument("--model", type=Path, help="model file (default: the baseline's)")
+    reg.add_argument("--update", action="store_true", help="rewrite the baseline")
+    reg.add_argument("--jobs", type=int, help="parallel replays (default: one per CPU)")
+    return parser
+
+
+def _add_virtual_rig_arguments(parser: argparse.ArgumentParser) -> None:
+    """The virtual-rig options of ``brake-hil simulate``."""
+    group = parser.add_argument_group(
+        "virtual rig", "any of these (or --engine virtual) simulates the virtual rig"
+    )
+    group.add_argument(
+        "--engine",
+        choices=("lti", "virtual"),
+        help="lti: the seed's LTI model (the default without virtual-rig options); "
+        "virtual: the higher-fidelity rig",
+    )
+    group.add_argument(
+        "--effect",
+        action="append",
+        metavar="NAME[=STRENGTH][,PARAM=VALUE...]",
+        help=f"add an effect (repeatable): {', '.join(EFFECTS)}; strength 0-1 (default 1)",
+    )
+    group.add_argument(
+        "--excitation",
+        choices=EXCITATIONS,
+        help="pulsing: p_i ramp then 5 Hz (default); solenoid: air pressure through the "
+        "master cylinder (eqs. 21a-b); ramp: rise, hold, fall to the highest pressure; "
+        "sweep: 5-25 Hz over --pulsing-seconds x 2",
+    )
+    group.add_argument(
+        "--nominal", type=Path, help="the rig the engineer believes (YAML; default: --rig)"
+    )
+    group.add_argument(
+        "--rig-out", type=Path, help="write the nominal rig YAML here (default OUT.rig.yaml)"
+    )
+    group.add_argument(
+        "--method", choices=("BDF", "Radau", "LSODA"), help=f"stiff solver ({SOLVER_METHOD})"
+    )
+    group.add_argument("--rtol", type=float, help=f"solver tolerance ({RELATIVE_TOLERANCE:g})")
+
+
+def _add_cases_parser(commands: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """The ``brake-hil cases`` sub-command."""
+    cases = commands.add_parser(
+        "cases", help="write labelled virtual-rig cases for scoring a diagnosis blind"
+    )
+    cases.add_argument("--out", type=Path, required=True, help="new directory")
+    cases.add_argument("--count", type=int, default=26, help="number of cases (26: one round)")
+    cases.add_argument("--seed", type=int, default=0)
+    cases.add_argument(
+        "--pulsing-seconds", type=float, default=5.0, help="per pressure segment (5: 18 s)"
+    )
+    cases.add_argument("--jobs", type=int, default=1, help="worker processes")
+    cases.add_argument(
+        "--error-scale", type=float, default=1.0, help="scales the rig tolerances (1 sigma)"
+    )
+    cases.add_argument(
+        "--kind",
+        action="append",
+        choices=("null", "single", "pair", "unexplained"),
+        default=[],
+        help="keep only cases of this kind (repeatable; default: every kind)",
+    )
+
+
+def uses_virtual_rig(args: argparse.Namespace) -> bool:
+    """True when ``simulate`` should run the virtual rig.
+
+    Raises:
+        BrakeHilError: a virtual-rig option with ``--engine lti``.
+    """
+    given = [name for name in _VIRTUAL_OPTIONS if getattr(args, name, None) is not None]
+    if args.engine == "lti" and given:
+        options = ", ".join("--" + name.replace("_", "-") for name in given)
+        raise BrakeHilError(f"{options} need the virtual rig; drop --engine lti")
+    return args.engine == "virtual" or bool(given)
