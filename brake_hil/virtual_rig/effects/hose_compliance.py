@@ -2,21 +2,21 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, EffectError, Parameter, Signal
-
-if TYPE_CHECKING:
-    from brake_hil.virtual_rig.plant import Plant
+from brake_hil.physics import catalogue
+from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, EffectError, Parameter
+from brake_hil.virtual_rig.laws import LineFlow, LinePort, LtiPlant, Signal, State, TruthLaw
 
 
 @dataclass(frozen=True)
-class HoseLadder:
-    """The line as an RC ladder: pipe and valve, then ``N`` hose segments, bound to a rig.
+class HoseLadder(TruthLaw):
+    """The line as an RC ladder: pipe and valve, then ``N`` hose segments, bound to a rig (the
+    host's line port, the node pressures its states).
 
     Node ``j`` (``0 .. N-1``) sits before hose segment ``j + 1`` (resistance ``R_t / N``);
     node 0 is the valve outlet and carries the hard pipe's compliance. The bore end of the
@@ -49,6 +49,32 @@ class HoseLadder:
         )
         return compliance
 
+    def states(self) -> tuple[State, ...]:
+        """The node pressures ``p_n0 .. p_n(N-1)`` (Pa)."""
+        return tuple(State(f"p_n{node}", 1e6) for node in range(self.segment_count))
+
+    def initial_state(self, equilibrium: Mapping[str, float]) -> tuple[float, ...]:
+        """At rest every node is at the bore pressure."""
+        return tuple(equilibrium["p_b"] for _ in range(self.segment_count))
+
+    def line_flow(self, port: LinePort, states: Sequence[Signal]) -> LineFlow:
+        """Pipe and valve into node 0, then the hose segments node to node into the bore."""
+        count = self.segment_count
+        segment_resistance = port.hose_resistance / count
+        nodes = list(states)
+        flow_rate = (port.master_pressure - nodes[0] - port.upstream_drop) / port.inertance
+        inflow = port.flow
+        rates: list[Signal] = []
+        for node in range(count):
+            downstream = nodes[node + 1] if node + 1 < count else port.bore_pressure
+            outflow = (nodes[node] - downstream) / segment_resistance
+            rates.append(
+                (inflow - outflow) / self.node_compliance(node, port.compliance(nodes[node]))
+            )
+            inflow = outflow
+        bore_end = self.bore_end_compliance(port.compliance(port.bore_pressure))
+        return LineFlow(flow_rate, rates, inflow, bore_end)
+
 
 @dataclass(frozen=True)
 class HoseCompliance(Effect):
@@ -69,15 +95,11 @@ class HoseCompliance(Effect):
     hose_expansion: float = 2.0e-13
     segments: int = 4
 
-    name = "hose_compliance"
+    entry = catalogue.entry("hose_compliance")
     parameters = (
         STRENGTH,
         Parameter("hose_expansion", "m^3/(Pa m)", 1.0e-14, 1.0e-12, "e_h, hose swell"),
         Parameter("segments", "-", 1, 16, "N, lumped hose segments"),
-    )
-    signature = (
-        "p_b lags p_i more and its peak-to-peak is lower than predicted, more at higher "
-        "frequency (sweep); F_k and x_c follow p_b; the mismatch hardly depends on pressure"
     )
     diagnosis_model = (
         "one lumped RC stage (a single extra compliance between the valve and the bore); "
@@ -89,7 +111,7 @@ class HoseCompliance(Effect):
         if int(self.segments) != self.segments:
             raise EffectError(f"effect {self.name}: segments = {self.segments!r} is not whole")
 
-    def law(self, plant: Plant) -> HoseLadder:
+    def law(self, plant: LtiPlant) -> HoseLadder:
         """The ladder of the plant's truth line at this strength."""
         rig = plant.rig
         count = int(self.segments)
@@ -112,9 +134,3 @@ class HoseCompliance(Effect):
             bore_end_volume=0.5 * hose_volume / count,
             bore_end_wall_compliance=0.5 * hose_wall / count,
         )
-
-    def install(self, plant: Plant) -> Plant:
-        """Line slot: the ladder replaces the lumped line."""
-        if not self.active:
-            return plant
-        return replace(plant, line=self.law(plant))
