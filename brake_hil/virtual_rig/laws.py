@@ -128,8 +128,9 @@ class TruthLaw:
 
     A law overrides the hooks of the ports it acts on (see the module docstring). The
     defaults change nothing: those of ``valve_drop`` and ``line_flow`` are the host's own
-    valve and line, which the host calls when no law replaces them; it calls no other
-    default. Laws are immutable values bound to one :class:`LtiPlant`.
+    linear valve and lumped line (the host calls the first when no law replaces the valve and
+    evaluates the second inline); it calls no other default. Laws are immutable values bound
+    to one :class:`LtiPlant`.
     """
 
     def states(self) -> tuple[State, ...]:
