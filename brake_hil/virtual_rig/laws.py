@@ -48,7 +48,6 @@ __all__ = [
     "HOOKS",
     "STATEFUL_HOOKS",
     "LineFlow",
-    "LinePort",
     "LtiPlant",
     "Signal",
     "State",
@@ -91,36 +90,9 @@ class State(NamedTuple):
     scale: float
 
 
-class LinePort(NamedTuple):
-    """What the line sees at one instant (SI): the ``line_flow`` hook's input.
-
-    ``flow`` is the flow ``Q_h`` through the hard pipe and valve (the host's state, carrying
-    the line's whole inertance); ``upstream_drop`` its pressure drop over pipe and valve.
-    """
-
-    master_pressure: Signal  # p_i, Pa
-    bore_pressure: Signal  # p_b, Pa
-    flow: Signal  # Q_h, m^3/s
-    upstream_drop: Signal  # Pa, over hard pipe and needle valve
-    hose_resistance: Signal  # R_t at the present viscosity, Pa s/m^3
-    inertance: float  # I_r + I_t, Pa s^2/m^3
-    fluid_compliance: Signal  # 1/Pa, per unit volume: fluid and the rig's own air (eq. 18)
-    extra_compliance: Callable[[Signal], Signal] | None  # 1/Pa at a gauge pressure (Pa)
-
-    def compliance(self, gauge_pressure: Signal) -> Signal:
-        """Compliance per unit fluid volume (1/Pa) at ``gauge_pressure`` (Pa), walls aside."""
-        if self.extra_compliance is None:
-            return self.fluid_compliance
-        return self.fluid_compliance + self.extra_compliance(gauge_pressure)
-
-
-class LineFlow(NamedTuple):
-    """The ``line_flow`` hook's answer (SI)."""
-
-    flow_rate: Signal  # dQ_h/dt, m^3/s^2
-    state_rates: list[Signal]  # the law's own states' rates
-    into_bore: Signal  # m^3/s, flow entering the bore chamber
-    bore_end_compliance: Signal  # m^3/Pa, compliance the line adds to the bore chamber
+LineFlow: TypeAlias = tuple[Signal, list[Signal], Signal, Signal]
+"""The ``line_flow`` hook's answer (SI): ``dQ_h/dt`` (m^3/s^2), the own states' rates, the
+flow entering the bore chamber (m^3/s) and the compliance the line adds to it (m^3/Pa)."""
 
 
 class TruthLaw:
@@ -174,18 +146,44 @@ class TruthLaw:
         del viscosity_factor
         return linear_resistance * linear_factor * flow
 
-    def line_flow(self, port: LinePort, states: Sequence[Signal]) -> LineFlow:
+    def line_flow(
+        self,
+        master_pressure: Signal,
+        bore_pressure: Signal,
+        flow: Signal,
+        upstream_drop: Signal,
+        hose_resistance: Signal,
+        inertance: float,
+        fluid_compliance: Signal,
+        extra_compliance: Callable[[Signal], Signal] | None,
+        states: Sequence[Signal],
+    ) -> LineFlow:
         """The line from the valve outlet to the bore, with the law's own states.
 
         The default is the host's own line, lumped (eq. 21c):
         ``I Q_h' = p_i - p_b - dp_upstream - R_t Q_h``, all of ``Q_h`` entering the bore.
+
+        Args:
+            master_pressure: ``p_i`` (Pa).
+            bore_pressure: ``p_b`` (Pa).
+            flow: ``Q_h`` (m^3/s), the host's state through hard pipe and valve, carrying the
+                line's whole inertance.
+            upstream_drop: pressure drop over hard pipe and valve (Pa).
+            hose_resistance: ``R_t`` at the present viscosity (Pa s/m^3).
+            inertance: ``I_r + I_t`` (Pa s^2/m^3).
+            fluid_compliance: per unit volume, the fluid and the rig's own air (eq. 18 without
+                the walls, 1/Pa).
+            extra_compliance: the laws' extra compliance per unit volume (1/Pa) at a gauge
+                pressure (Pa), or None.
+            states: the law's own states (SI).
+
+        Returns:
+            ``(dQ_h/dt, own states' rates, flow into the bore, compliance added to the bore)``.
         """
-        del states
-        hose_drop = port.hose_resistance * port.flow
-        rate = (
-            port.master_pressure - port.bore_pressure - port.upstream_drop - hose_drop
-        ) / port.inertance
-        return LineFlow(rate, [], port.flow, 0.0)
+        del fluid_compliance, extra_compliance, states
+        hose_drop = hose_resistance * flow
+        rate = (master_pressure - bore_pressure - upstream_drop - hose_drop) / inertance
+        return rate, [], flow, 0.0
 
     def seal_asymmetry(self) -> float:
         """Apply/release asymmetry ``a`` (-) of the seal, for a frictional seal law's slip

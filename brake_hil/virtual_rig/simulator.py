@@ -51,7 +51,7 @@ from brake_hil.physics.rig import Rig
 from brake_hil.types import FloatArray
 from brake_hil.virtual_rig.effects.base import Effect
 from brake_hil.virtual_rig.excitation import Excitation, seed_pulsing
-from brake_hil.virtual_rig.laws import LinePort, Signal, State, TruthLaw, hooked
+from brake_hil.virtual_rig.laws import Signal, State, TruthLaw, hooked
 from brake_hil.virtual_rig.plant import Plant, build_plant
 
 SOLVER_METHOD = "BDF"
@@ -215,6 +215,7 @@ class _Ports:
 
     def __init__(self, laws: Sequence[TruthLaw]) -> None:
         self.drift = [law.drift_factors for law in hooked(laws, "drift_factors")]
+        self.more_drift = self.drift[1:]
         compliance = [law.specific_compliance for law in hooked(laws, "specific_compliance")]
         self.extra_compliance: Callable[[Signal], Signal] | None = None
         if len(compliance) == 1:
@@ -239,6 +240,7 @@ class _Ports:
             self.block_damping += block
         self.bore_forces = hooked(laws, "bore_force")
         self.caliper_share = [law.caliper_share for law in hooked(laws, "caliper_share")]
+        self.more_caliper_share = self.caliper_share[1:]
         self.internals = hooked(laws, "internals")
 
     def stateful(self) -> tuple[list[TruthLaw], list[TruthLaw]]:
@@ -321,8 +323,11 @@ class _Dynamics:
         self._next_report = -math.inf
         self._report_every = max(excitation.duration / 50.0, 1e-3)
 
-    def evaluate(self, t: Signal, x: Sequence[Signal]) -> tuple[list[Signal], dict[str, Signal]]:
-        """Derivatives (SI, one per state) and auxiliary signals at time ``t`` (s).
+    def evaluate(
+        self, t: Signal, x: Sequence[Signal], *, outputs: bool = False
+    ) -> tuple[list[Signal], dict[str, Signal]]:
+        """Derivatives (SI, one per state) and, with ``outputs``, the auxiliary signals at time
+        ``t`` (s) (an empty mapping without).
 
         ``x`` holds the SI states, each a float (and ``t`` a float) or each an array of one
         length (and ``t`` a float or an array of that length).
@@ -334,7 +339,7 @@ class _Dynamics:
         valve_factor: Signal = 1.0
         if ports.drift:
             viscosity, modulus, valve_factor = ports.drift[0](t)
-            for drift in ports.drift[1:]:
+            for drift in ports.more_drift:
                 factors = drift(t)
                 viscosity = viscosity * factors[0]
                 modulus = modulus * factors[1]
@@ -368,7 +373,7 @@ class _Dynamics:
             into_bore = flow
         else:
             own = self.line_states
-            port = LinePort(
+            derivative[self.i_q0], derivative[own], into_bore, bore_extra = ports.line.line_flow(
                 p_i,
                 p_b,
                 flow,
@@ -377,12 +382,8 @@ class _Dynamics:
                 self.line_inertance,
                 fluid,
                 extra,
+                x[own],
             )
-            line = ports.line.line_flow(port, x[own])
-            derivative[self.i_q0] = line.flow_rate
-            derivative[own] = line.state_rates
-            into_bore = line.into_bore
-            bore_extra = line.bore_end_compliance
 
         # master-cylinder chamber (21b)
         if self.air_driven:
@@ -418,7 +419,7 @@ class _Dynamics:
         share: Signal = 1.0
         if ports.caliper_share:
             share = ports.caliper_share[0](pressure_force)
-            for caliper_share in ports.caliper_share[1:]:
+            for caliper_share in ports.more_caliper_share:
                 share = share * caliper_share(pressure_force)
 
         if self.bore_compliance_override is not None:
@@ -445,6 +446,8 @@ class _Dynamics:
             - ports.caliper_damping * v_c
         ) / params.caliper_mass
 
+        if not outputs:
+            return derivative, {}
         auxiliary: dict[str, Signal] = {
             "p_i": p_i,
             "p_b": p_b,
@@ -486,7 +489,7 @@ class _Dynamics:
 
     def signals(self, time: FloatArray, states: FloatArray) -> dict[str, FloatArray]:
         """Auxiliary signals at ``time`` (s) for SI ``states`` of shape ``(n, len(time))``."""
-        _, auxiliary = self.evaluate(time, list(states))
+        _, auxiliary = self.evaluate(time, list(states), outputs=True)
         return {
             key: np.array(np.broadcast_to(value, time.shape), dtype=float)
             for key, value in auxiliary.items()

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 import math
 
@@ -10,7 +10,7 @@ import numpy as np
 
 from brake_hil.physics import catalogue
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, EffectError, Parameter
-from brake_hil.virtual_rig.laws import LineFlow, LinePort, LtiPlant, Signal, State, TruthLaw
+from brake_hil.virtual_rig.laws import LineFlow, LtiPlant, Signal, State, TruthLaw
 
 
 @dataclass(frozen=True)
@@ -57,23 +57,33 @@ class HoseLadder(TruthLaw):
         """At rest every node is at the bore pressure."""
         return tuple(equilibrium["p_b"] for _ in range(self.segment_count))
 
-    def line_flow(self, port: LinePort, states: Sequence[Signal]) -> LineFlow:
+    def line_flow(
+        self,
+        master_pressure: Signal,
+        bore_pressure: Signal,
+        flow: Signal,
+        upstream_drop: Signal,
+        hose_resistance: Signal,
+        inertance: float,
+        fluid_compliance: Signal,
+        extra_compliance: Callable[[Signal], Signal] | None,
+        states: Sequence[Signal],
+    ) -> LineFlow:
         """Pipe and valve into node 0, then the hose segments node to node into the bore."""
         count = self.segment_count
-        segment_resistance = port.hose_resistance / count
-        nodes = list(states)
-        flow_rate = (port.master_pressure - nodes[0] - port.upstream_drop) / port.inertance
-        inflow = port.flow
+        segment_resistance = hose_resistance / count
+        fluid, extra, nodes = fluid_compliance, extra_compliance, states
+        flow_rate = (master_pressure - nodes[0] - upstream_drop) / inertance
+        inflow = flow
         rates: list[Signal] = []
         for node in range(count):
-            downstream = nodes[node + 1] if node + 1 < count else port.bore_pressure
+            downstream = nodes[node + 1] if node + 1 < count else bore_pressure
             outflow = (nodes[node] - downstream) / segment_resistance
-            rates.append(
-                (inflow - outflow) / self.node_compliance(node, port.compliance(nodes[node]))
-            )
+            node_fluid = fluid if extra is None else fluid + extra(nodes[node])
+            rates.append((inflow - outflow) / self.node_compliance(node, node_fluid))
             inflow = outflow
-        bore_end = self.bore_end_compliance(port.compliance(port.bore_pressure))
-        return LineFlow(flow_rate, rates, inflow, bore_end)
+        bore_fluid = fluid if extra is None else fluid + extra(bore_pressure)
+        return flow_rate, rates, inflow, self.bore_end_compliance(bore_fluid)
 
 
 @dataclass(frozen=True)
