@@ -6,6 +6,7 @@ measures it like the rig's DAQ, and writes recordings and labelled benchmark cas
 
 from __future__ import annotations
 
+from brake_hil.errors import SimulationError
 from brake_hil.virtual_rig.effects import EFFECTS, Effect, EffectError, make_effect, parse_effect
 from brake_hil.virtual_rig.excitation import (
     Excitation,
@@ -17,7 +18,6 @@ from brake_hil.virtual_rig.excitation import (
 from brake_hil.virtual_rig.plant import Plant, base_plant, build_plant
 from brake_hil.virtual_rig.simulator import (
     RigRun,
-    SimulationError,
     SolverStats,
     acquire,
     simulate_rig,

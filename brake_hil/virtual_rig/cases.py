@@ -39,9 +39,7 @@ from brake_hil import __version__
 from brake_hil.physics.excitation import SEED_MAX_PRESSURES
 from brake_hil.physics.rig import Rig, rig_from_mapping
 from brake_hil.virtual_rig.bag import write_run
-from brake_hil.virtual_rig.effects import EFFECTS, OUT_OF_LIBRARY, Effect, make_effect
-from brake_hil.virtual_rig.effects.sensor_delay import CHANNELS
-from brake_hil.virtual_rig.effects.sensor_nonlinearity import NONLINEAR_CHANNELS
+from brake_hil.virtual_rig.effects import EFFECTS, OUT_OF_LIBRARY, Effect, effect_class
 from brake_hil.virtual_rig.excitation import Excitation, seed_pulsing, solenoid_pulsing
 from brake_hil.virtual_rig.rig_yaml import rig_to_mapping, rig_with_values, write_rig
 from brake_hil.virtual_rig.simulator import simulate_rig
@@ -175,13 +173,10 @@ def _schedule(count: int, seed: int) -> Iterator[tuple[str, tuple[str, ...], tup
 
 
 def _draw_effect(name: str, strength_class: str, rng: np.random.Generator) -> Effect:
+    """The effect ``name`` at a strength of its class, its case parameters drawn by itself."""
     low, high = SUBTLE_STRENGTHS if strength_class == "subtle" else STRONG_STRENGTHS
     strength = float(np.round(rng.uniform(low, high), 3))
-    if name == "sensor_delay":
-        return make_effect(name, strength, channel=str(rng.choice(CHANNELS)))
-    if name == "sensor_nonlinearity":
-        return make_effect(name, strength, channel=str(rng.choice(NONLINEAR_CHANNELS)))
-    return make_effect(name, strength)
+    return effect_class(name).draw(rng, strength)
 
 
 def draw_parameter_errors(

@@ -2,14 +2,15 @@
 
 :func:`simulate_rig` integrates the seed's rig end to end, from the air pressure through the
 master cylinder (eqs. 21a-b) or from a given master-cylinder pressure, through the line
-(21c), the bore chamber (21d), piston (21e) and caliper (21f), with every effect's law in its
-slot of the :class:`~brake_hil.virtual_rig.plant.Plant`, using ``scipy.integrate.solve_ivp``
-(BDF, the variable-order stiff family of MATLAB's ode15s that the seed used, maximum step
-1 ms) on scaled states. The right-hand side runs on Python floats for the solver's steps and
-on arrays for the Jacobian (forward differences from one vectorised call). Between samples
-the input is read linearly (a first-order hold, as the LTI discretisation reads it), or by a
-cubic spline for the air pressure. The true signals are read at the 1 kHz stamps; the
-measurement chain then skews a channel if sensor_delay asks, adds sensor noise and quantises
+(21c), the bore chamber (21d), piston (21e) and caliper (21f), with every installed truth law
+on the ports it implements (:mod:`brake_hil.virtual_rig.laws`), using
+``scipy.integrate.solve_ivp`` (BDF, the variable-order stiff family of MATLAB's ode15s that
+the seed used, maximum step 1 ms) on scaled states. The right-hand side runs on Python floats
+for the solver's steps and on arrays for the Jacobian (forward differences from one
+vectorised call). Between samples the input is read linearly (a first-order hold, as the LTI
+discretisation reads it), or by a cubic spline for the air pressure. The true signals are
+read at the 1 kHz stamps; the measurement chain then passes each channel through the laws'
+acquisition hooks (a delayed channel, a transducer's gain), adds sensor noise and quantises
 to 16 bits over the seed's sensor ranges (:mod:`brake_hil.physics.measurement`). Measured
 signals are raw (unfiltered).
 
@@ -48,11 +49,9 @@ from brake_hil.physics.measurement import SENSORS, measure
 from brake_hil.physics.parameters import DEFAULT_MEAN_PRESSURE, derive_parameters
 from brake_hil.physics.rig import Rig
 from brake_hil.types import FloatArray
-from brake_hil.virtual_rig.effects.base import Effect, Signal
-from brake_hil.virtual_rig.effects.seal_groove_asymmetry import asymmetric_spring
-from brake_hil.virtual_rig.effects.sensor_delay import ChannelSkew
-from brake_hil.virtual_rig.effects.sensor_nonlinearity import QuadraticGain
+from brake_hil.virtual_rig.effects.base import Effect
 from brake_hil.virtual_rig.excitation import Excitation, seed_pulsing
+from brake_hil.virtual_rig.laws import Signal, State, TruthLaw, hooked
 from brake_hil.virtual_rig.plant import Plant, build_plant
 
 SOLVER_METHOD = "BDF"
@@ -68,6 +67,7 @@ ABSOLUTE_TOLERANCE = 1.0e-6
 ``rtol`` when that is smaller."""
 _LOWEST_OPERATING_PRESSURE = 1.0e3  # Pa, as parameters.effective_bulk_modulus floors it
 _JACOBIAN_STEP = 1.5e-8  # relative finite-difference step on the scaled states
+_NO_STATES = slice(0, 0)  # a law's own states when it has none
 
 ProgressCallback = Callable[[float], None]
 """Called with the simulated time (s) reached, a few dozen times per run."""
@@ -148,6 +148,12 @@ class _Layout:
         self.scales.append(scale)
         return len(self.names) - 1
 
+    def extend(self, states: Sequence[State]) -> slice:
+        start = len(self.names)
+        for state in states:
+            self.add(state.name, state.scale)
+        return slice(start, len(self.names))
+
 
 def operating_pressure_schedule(
     time: FloatArray, master_pressure: FloatArray, period: float
@@ -200,6 +206,65 @@ class _Sampled:
         return np.interp(t, self.time, self.values)
 
 
+class _Ports:
+    """The installed laws sorted onto the host's ports (see :mod:`~brake_hil.virtual_rig.laws`).
+
+    Each hook is bound once; a port no law implements is None (or empty), and the
+    equations then keep eq. 21's own term.
+    """
+
+    def __init__(self, laws: Sequence[TruthLaw]) -> None:
+        self.drift = [law.drift_factors for law in hooked(laws, "drift_factors")]
+        self.more_drift = self.drift[1:]
+        compliance = [law.specific_compliance for law in hooked(laws, "specific_compliance")]
+        self.extra_compliance: Callable[[Signal], Signal] | None = None
+        if len(compliance) == 1:
+            self.extra_compliance = compliance[0]
+        elif compliance:
+            self.extra_compliance = _Summed(compliance)
+        valve = hooked(laws, "valve_drop")
+        self.valve_drop = (valve[0] if valve else TruthLaw()).valve_drop
+        line = hooked(laws, "line_flow")
+        self.line = line[0] if line else None
+        self.seal_asymmetry = sum((law.seal_asymmetry() for law in laws), 0.0)
+        seal = hooked(laws, "seal_force")
+        self.seal = seal[0] if seal else None
+        spring = hooked(laws, "spring_deflection")
+        spring_share = self.seal.spring_share() if self.seal is not None else 1.0
+        self.spring = spring[0] if spring and spring_share > 0.0 else None
+        self.caliper_damping = 0.0
+        self.block_damping = 0.0
+        for law in hooked(laws, "structural_damping"):
+            caliper, block = law.structural_damping()
+            self.caliper_damping += caliper
+            self.block_damping += block
+        self.bore_forces = hooked(laws, "bore_force")
+        self.caliper_share = [law.caliper_share for law in hooked(laws, "caliper_share")]
+        self.more_caliper_share = self.caliper_share[1:]
+        self.internals = hooked(laws, "internals")
+
+    def stateful(self) -> tuple[list[TruthLaw], list[TruthLaw]]:
+        """The laws whose own states the plant integrates, in layout order: the line's
+        (before ``p_b``) and the seal's and piston-bore forces' (after ``x_c'``)."""
+        line = [self.line] if self.line is not None else []
+        seal = [law for law in (self.seal, self.spring) if law is not None]
+        structure = [*seal, *self.bore_forces]
+        return [law for law in line if law.states()], [law for law in structure if law.states()]
+
+
+class _Summed:
+    """The sum of several laws' values at one argument, in their order."""
+
+    def __init__(self, hooks: Sequence[Callable[[Signal], Signal]]) -> None:
+        self.hooks = hooks
+
+    def __call__(self, value: Signal) -> Signal:
+        total = self.hooks[0](value)
+        for hook in self.hooks[1:]:
+            total = total + hook(value)
+        return total
+
+
 class _Dynamics:
     """The truth plant's equations on scaled states: one state (floats) or many (columns)."""
 
@@ -225,9 +290,7 @@ class _Dynamics:
         overrides = rig.model_overrides
         self.bore_compliance_override = overrides.get("C_b")
         self.master_compliance_override = overrides.get("C_i")
-        seal = plant.seal
-        self.friction_share = seal.friction_share if seal.friction is not None else 0.0
-        self.has_asymmetric_spring = seal.asymmetry > 0.0 and self.friction_share < 1.0
+        self.ports = _Ports(plant.laws)
 
         layout = _Layout()
         if self.air_driven:
@@ -235,19 +298,22 @@ class _Dynamics:
             self.i_vi = layout.add("v_i", 1e-2)
             self.i_pi = layout.add("p_i", 1e6)
         self.i_q0 = layout.add("Q_h", 1e-6)
-        self.i_nodes = (
-            [layout.add(f"p_n{node}", 1e6) for node in range(plant.line.segment_count)]
-            if plant.line is not None
-            else []
-        )
+        line_laws, structure_laws = self.ports.stateful()
+        own = {id(law): layout.extend(law.states()) for law in line_laws}
         self.i_pb = layout.add("p_b", 1e6)
         self.i_xp = layout.add("x_p", 1e-6)
         self.i_vp = layout.add("v_p", 1e-3)
         self.i_xc = layout.add("x_c", 1e-5)
         self.i_vc = layout.add("v_c", 1e-3)
-        self.i_z = layout.add("z", 1e-5) if seal.friction is not None else -1
-        self.i_xr = layout.add("x_r", 1e-5) if self.has_asymmetric_spring else -1
-        self.i_w = layout.add("w", 1.0) if plant.bore_friction is not None else -1
+        own.update({id(law): layout.extend(law.states()) for law in structure_laws})
+        # each law's own states as a slice of the state vector (empty when it has none)
+        self.own_states = [(law, own[id(law)]) for law in (*line_laws, *structure_laws)]
+        ports = self.ports
+        self.line_states = own.get(id(ports.line), _NO_STATES)
+        self.spring_states = own.get(id(ports.spring), _NO_STATES)
+        self.seal_states = own.get(id(ports.seal), _NO_STATES)
+        self.bore_forces = [(law, own.get(id(law), _NO_STATES)) for law in ports.bore_forces]
+        self.internals = [(law, own.get(id(law), _NO_STATES)) for law in ports.internals]
         self.names = tuple(layout.names)
         self.scale = np.array(layout.scales)
         self.scale_list = layout.scales
@@ -257,23 +323,30 @@ class _Dynamics:
         self._next_report = -math.inf
         self._report_every = max(excitation.duration / 50.0, 1e-3)
 
-    def evaluate(self, t: Signal, x: Sequence[Signal]) -> tuple[list[Signal], dict[str, Signal]]:
-        """Derivatives (SI, one per state) and auxiliary signals at time ``t`` (s).
+    def evaluate(
+        self, t: Signal, x: Sequence[Signal], *, outputs: bool = False
+    ) -> tuple[list[Signal], dict[str, Signal]]:
+        """Derivatives (SI, one per state) and, with ``outputs``, the auxiliary signals at time
+        ``t`` (s) (an empty mapping without).
 
         ``x`` holds the SI states, each a float (and ``t`` a float) or each an array of one
         length (and ``t`` a float or an array of that length).
         """
-        plant, params = self.plant, self.plant.params
+        plant, params, ports = self.plant, self.plant.params, self.ports
         derivative: list[Signal] = [0.0] * self.size
-        drift = plant.drift
         viscosity: Signal = 1.0
         modulus: Signal = 1.0
         valve_factor: Signal = 1.0
-        if drift is not None:
-            viscosity, modulus, valve_factor = drift.factors(t)
+        if ports.drift:
+            viscosity, modulus, valve_factor = ports.drift[0](t)
+            for drift in ports.more_drift:
+                factors = drift(t)
+                viscosity = viscosity * factors[0]
+                modulus = modulus * factors[1]
+                valve_factor = valve_factor * factors[2]
         drive = self.drive(t)
         fluid = self.fluid_compliance(t)
-        air = plant.air
+        extra = ports.extra_compliance
 
         # master cylinder (21a) or the given p_i
         if self.air_driven:
@@ -289,36 +362,28 @@ class _Dynamics:
             p_i = drive
         p_b = x[self.i_pb]
 
-        # line (21c): pipe, valve, hose; an RC ladder when the hose is compliant
+        # line (21c): pipe and valve, then the hose (lumped unless a law replaces it)
         flow = x[self.i_q0]
-        if plant.valve is not None:
-            valve_drop = plant.valve.pressure_drop(flow, viscosity, valve_factor)
-        else:
-            valve_drop = plant.valve_resistance * valve_factor * flow
+        valve_drop = ports.valve_drop(flow, plant.valve_resistance, viscosity, valve_factor)
         pipe_drop = plant.pipe_resistance * viscosity * flow + valve_drop
         bore_extra: Signal = 0.0
-        if plant.line is None:
+        if ports.line is None:
             hose_drop = plant.hose_resistance * viscosity * flow
             derivative[self.i_q0] = (p_i - p_b - pipe_drop - hose_drop) / self.line_inertance
             into_bore = flow
         else:
-            line = plant.line
-            count = line.segment_count
-            segment_resistance = plant.hose_resistance * viscosity / count
-            nodes = [x[i] for i in self.i_nodes]
-            derivative[self.i_q0] = (p_i - nodes[0] - pipe_drop) / self.line_inertance
-            inflow = flow
-            for node in range(count):
-                downstream = nodes[node + 1] if node + 1 < count else p_b
-                outflow = (nodes[node] - downstream) / segment_resistance
-                node_fluid = fluid if air is None else fluid + air.specific_compliance(nodes[node])
-                derivative[self.i_nodes[node]] = (inflow - outflow) / line.node_compliance(
-                    node, node_fluid
-                )
-                inflow = outflow
-            into_bore = inflow
-            bore_fluid = fluid if air is None else fluid + air.specific_compliance(p_b)
-            bore_extra = line.bore_end_compliance(bore_fluid)
+            own = self.line_states
+            derivative[self.i_q0], derivative[own], into_bore, bore_extra = ports.line.line_flow(
+                p_i,
+                p_b,
+                flow,
+                pipe_drop,
+                plant.hose_resistance * viscosity,
+                self.line_inertance,
+                fluid,
+                extra,
+                x[own],
+            )
 
         # master-cylinder chamber (21b)
         if self.air_driven:
@@ -326,68 +391,63 @@ class _Dynamics:
                 master_c = self.master_compliance_override + 0.0 * fluid
             else:
                 master_c = plant.master_volume * (fluid + self.wall_compliance)
-            if air is not None:
-                master_c = master_c + plant.master_volume * air.specific_compliance(p_i)
+            if extra is not None:
+                master_c = master_c + plant.master_volume * extra(p_i)
             derivative[self.i_pi] = (params.master_area * v_i - flow) / master_c
 
-        # seals, bore friction, piston and caliper (21d-f)
+        # seals, piston-bore forces, piston and caliper (21d-f)
         x_p, v_p, x_c, v_c = x[self.i_xp], x[self.i_vp], x[self.i_xc], x[self.i_vc]
         seal_x, seal_v = x_p - x_c, v_p - v_c
-        seal = plant.seal
         spring_x = seal_x
-        if self.has_asymmetric_spring:
-            relaxed = x[self.i_xr]
-            deflection = seal_x - relaxed
-            derivative[self.i_xr] = deflection / seal.relaxation_time
-            width = seal.asymmetry_width
-            spring_x = relaxed + asymmetric_spring(deflection, seal.asymmetry, width)
+        if ports.spring is not None:
+            own = self.spring_states
+            spring_x, derivative[own] = ports.spring.spring_deflection(seal_x, x[own])
         seal_force = modulus * (
             params.effective_hydraulic_stiffness * spring_x
             + params.effective_hydraulic_damping * seal_v
         )
-        if seal.friction is not None:
-            law = seal.friction
-            z = x[self.i_z]
-            slip = law.slip_force(seal_v, z, seal.asymmetry, modulus)
-            z_rate = law.deflection_rate(z, seal_v, slip, modulus)
-            derivative[self.i_z] = z_rate
-            friction = law.force(z, z_rate, seal_v, modulus, viscosity)
-            share_ = self.friction_share
-            seal_force = (1.0 - share_) * seal_force + share_ * friction
-        bore_friction: Signal = 0.0 * p_b
-        if plant.bore_friction is not None:
-            w = x[self.i_w]
-            derivative[self.i_w] = plant.bore_friction.state_rate(w, seal_v)
-            bore_friction = plant.bore_friction.force(w, seal_v, p_b, x_c)
+        if ports.seal is not None:
+            own = self.seal_states
+            seal_force, derivative[own] = ports.seal.seal_force(
+                seal_force, seal_v, ports.seal_asymmetry, modulus, viscosity, x[own]
+            )
+        bore_force: Signal = 0.0 * p_b
+        for index, (law, own) in enumerate(self.bore_forces):
+            force, derivative[own] = law.bore_force(seal_v, p_b, x_c, x[own])
+            bore_force = force if index == 0 else bore_force + force
         pressure_force = params.bore_area * p_b
         share: Signal = 1.0
-        if plant.force_share is not None:
-            share = plant.force_share.share(pressure_force)
+        if ports.caliper_share:
+            share = ports.caliper_share[0](pressure_force)
+            for caliper_share in ports.more_caliper_share:
+                share = share * caliper_share(pressure_force)
 
         if self.bore_compliance_override is not None:
             bore_c = self.bore_compliance_override + bore_extra
         else:
             bore_c = plant.bore_volume * (fluid + self.wall_compliance) + bore_extra
-        if air is not None:
-            bore_c = bore_c + plant.bore_volume * air.specific_compliance(p_b)
+        if extra is not None:
+            bore_c = bore_c + plant.bore_volume * extra(p_b)
         derivative[self.i_pb] = (into_bore - params.piston_area * seal_v) / bore_c
         derivative[self.i_xp] = v_p
         derivative[self.i_vp] = (
             params.piston_area * p_b
             - seal_force
-            - bore_friction
+            - bore_force
             - params.block_stiffness * x_p
-            - seal.block_damping * v_p
+            - ports.block_damping * v_p
         ) / params.piston_mass
         derivative[self.i_xc] = v_c
         derivative[self.i_vc] = (
             -share * pressure_force
             + seal_force
-            + bore_friction
+            + bore_force
             - params.caliper_stiffness * x_c
-            - seal.caliper_damping * v_c
+            - ports.caliper_damping * v_c
         ) / params.caliper_mass
 
+        if not outputs:
+            return derivative, {}
         auxiliary: dict[str, Signal] = {
             "p_i": p_i,
             "p_b": p_b,
@@ -395,13 +455,13 @@ class _Dynamics:
             "x_c": x_c,
             "seal_displacement": seal_x,
             "seal_force": seal_force,
-            "bore_friction_force": bore_friction,
+            "bore_friction_force": bore_force,
             "caliper_force_share": share,
             "bore_compliance": bore_c,
             "line_flow": flow,
         }
-        if drift is not None:
-            auxiliary["temperature"] = drift.temperature(t)
+        for law, own in self.internals:
+            auxiliary.update(law.internals(t, x[own]))
         return derivative, auxiliary
 
     def rhs(self, t: float, y: FloatArray) -> FloatArray:
@@ -429,7 +489,7 @@ class _Dynamics:
 
     def signals(self, time: FloatArray, states: FloatArray) -> dict[str, FloatArray]:
         """Auxiliary signals at ``time`` (s) for SI ``states`` of shape ``(n, len(time))``."""
-        _, auxiliary = self.evaluate(time, list(states))
+        _, auxiliary = self.evaluate(time, list(states), outputs=True)
         return {
             key: np.array(np.broadcast_to(value, time.shape), dtype=float)
             for key, value in auxiliary.items()
@@ -446,15 +506,9 @@ class _Dynamics:
         for index, name in enumerate(self.names):
             if name in values:
                 physical[index] = values[name]
-        for index in self.i_nodes:
-            physical[index] = values["p_b"]
-        seal_x = values["x_p"] - values["x_c"]
-        if self.i_xr >= 0:
-            physical[self.i_xr] = seal_x
-        if self.i_z >= 0 and plant.seal.friction is not None:
-            law = plant.seal.friction
-            limit = 0.99 * law.coulomb_force / law.bristle_stiffness
-            physical[self.i_z] = float(np.clip(seal_x, -limit, limit))
+        equilibrium = {**values, "seal_displacement": values["x_p"] - values["x_c"]}
+        for law, own in self.own_states:
+            physical[own] = law.initial_state(equilibrium)
         scaled: FloatArray = physical / self.scale
         return scaled
 
@@ -474,24 +528,24 @@ def master_pressure_estimate(rig: Rig, excitation: Excitation) -> FloatArray:
 def acquire(
     time: FloatArray,
     true_signals: Mapping[str, FloatArray],
-    skews: Sequence[ChannelSkew | QuadraticGain] = (),
+    laws: Sequence[TruthLaw] = (),
     seed: int = 0,
 ) -> dict[str, FloatArray]:
-    """The DAQ: a channel's acquisition laws (sensor_delay, sensor_nonlinearity) in order,
-    then noise and quantisation (16 bits, seed's ranges).
+    """The DAQ: each law's acquisition hook on every channel, in the laws' order (a delayed
+    channel, a transducer's gain), then noise and quantisation (16 bits, seed's ranges).
 
     Channels are drawn in the order ``p_i``, ``p_b``, ``F_k``, ``x_c``, ``p_a`` from one
-    generator seeded with ``seed``, so a skew leaves the other channels' noise unchanged.
+    generator seeded with ``seed``, so a law on one channel leaves the others' noise unchanged.
     """
+    chain = hooked(laws, "acquisition")
     rng = np.random.default_rng(seed)
     measured: dict[str, FloatArray] = {}
     for key in ("p_i", "p_b", "F_k", "x_c", "p_a"):
         if key not in true_signals:
             continue
         values = np.asarray(true_signals[key], dtype=float)
-        for law in skews:
-            if law.channel == key:
-                values = law.apply(time, values)
+        for law in chain:
+            values = law.acquisition(key, time, values)
         measured[key] = measure(values, SENSORS[key], rng)
     return measured
 
@@ -600,7 +654,7 @@ def simulate_rig(
         block_force=true_signals["F_k"],
         caliper_displacement=true_signals["x_c"],
         air_pressure=true_signals.get("p_a"),
-        measured=acquire(time, true_signals, plant.skews, seed),
+        measured=acquire(time, true_signals, plant.laws, seed),
         internals=internals,
         plant=plant,
         excitation=excitation,

@@ -1,22 +1,147 @@
-"""Every effect through one contract: name, description with source, parameters, strength 0."""
+"""Every effect through one contract: name, description with source, parameters, strength 0;
+every catalogue entry has one truth law; a truth law registered at run time runs."""
 
 from __future__ import annotations
 
-from dataclasses import fields
+from collections.abc import Iterator
+from dataclasses import dataclass, fields
 import re
 
 import numpy as np
 import pytest
 
+from brake_hil.physics import catalogue
+from brake_hil.physics.catalogue import EffectEntry, Quantity
 from brake_hil.topics import EFFECT_NAMES
-from brake_hil.virtual_rig import EFFECTS, EffectError, make_effect, parse_effect
-from brake_hil.virtual_rig.effects import OUT_OF_LIBRARY, Effect
+from brake_hil.virtual_rig import (
+    EFFECTS,
+    EffectError,
+    make_effect,
+    parse_effect,
+    seed_pulsing,
+    simulate_rig,
+)
+from brake_hil.virtual_rig.effects import (
+    OUT_OF_LIBRARY,
+    STRENGTH,
+    Effect,
+    Parameter,
+    register_effect,
+    unregister_effect,
+)
+from brake_hil.virtual_rig.laws import LtiPlant, Signal, TruthLaw
 from test.virtual_rig.conftest import RunFactory
 
 INTERFACE_EFFECTS = EFFECT_NAMES  # interface.md's effect table, less "unexplained"
 ALL_EFFECTS = {**EFFECTS, **OUT_OF_LIBRARY}
 EVERY_EFFECT = (*INTERFACE_EFFECTS, *OUT_OF_LIBRARY)  # the out-of-library ones keep it too
 SHORT = {"max_pressures": (1.38e6,), "pulsing_s": 0.6}
+CATALOGUE_ENTRIES = (*catalogue.CATALOGUE.values(), *catalogue.OUT_OF_LIBRARY.values())
+SI_UNIT = re.compile(r"^(-|channel|(1|kg|m|s|N|Pa|K)(\^\d)?([ /*()]+(kg|m|s|N|Pa|K)(\^\d)?\)?)*)$")
+"""A parameter's unit: dimensionless, a channel name, or SI symbols (``m^3/(Pa m)``)."""
+
+
+def _truth_laws() -> Iterator[type[Effect]]:
+    """Every Effect subclass defined anywhere, at any depth."""
+    pending = list(Effect.__subclasses__())
+    while pending:
+        cls = pending.pop()
+        pending.extend(cls.__subclasses__())
+        yield cls
+
+
+@pytest.mark.parametrize("item", CATALOGUE_ENTRIES, ids=lambda item: item.name)
+def test_every_catalogue_entry_has_exactly_one_truth_law_with_its_signature(
+    item: EffectEntry,
+) -> None:
+    pointing = [cls for cls in _truth_laws() if vars(cls).get("entry") is item]
+    assert len(pointing) == 1, pointing
+    (cls,) = pointing
+    in_library = item.name in catalogue.CATALOGUE
+    assert (EFFECTS if in_library else OUT_OF_LIBRARY)[item.name] is cls
+    assert item.name not in (OUT_OF_LIBRARY if in_library else EFFECTS)
+    assert cls.name == item.name
+    assert cls.signature == item.signature
+    assert make_effect(item.name).describe().count(item.signature) == 1
+    for parameter in cls.parameters:
+        assert SI_UNIT.match(parameter.unit), (parameter.name, parameter.unit)
+
+
+def test_the_truth_laws_follow_the_catalogue_order() -> None:
+    assert tuple(EFFECTS) == tuple(catalogue.CATALOGUE)
+    assert tuple(OUT_OF_LIBRARY) == tuple(catalogue.OUT_OF_LIBRARY)
+
+
+_STIFF_MOUNT = EffectEntry(
+    name="stiff_mount_test_only",
+    title="the caliper sees more of the pressure force (a throw-away test effect)",
+    physics="A constant extra share of A_eb p_b reaches the caliper.",
+    source="seed eq. 22 (a test of the registration only)",
+    signature="x_c larger than predicted by a constant factor; p_b and F_k unchanged",
+    channels=("x_c",),
+    quantities=(Quantity("d", "-", "extra share of the pressure force"),),
+)
+
+
+@dataclass(frozen=True)
+class _ExtraShare(TruthLaw):
+    extra: float
+
+    def caliper_share(self, pressure_force: Signal) -> Signal:
+        return 1.0 + self.extra + 0.0 * pressure_force
+
+
+@dataclass(frozen=True)
+class _StiffMount(Effect):
+    """A throw-away effect: a constant extra share of the pressure force on the caliper, for
+    testing that a truth law registered at run time runs through the virtual rig with no
+    change to the host. Source: seed eq. 22 (2012)."""
+
+    strength: float = 1.0
+    extra_share: float = 0.2
+
+    entry = _STIFF_MOUNT
+    parameters = (STRENGTH, Parameter("extra_share", "-", 0.0, 0.5, "d at strength 1"))
+    diagnosis_model = "a constant caliper force share"
+
+    def law(self, plant: LtiPlant) -> _ExtraShare:
+        del plant
+        return _ExtraShare(self.strength * self.extra_share)
+
+
+@pytest.fixture
+def stiff_mount() -> Iterator[type[Effect]]:
+    catalogue.register(_STIFF_MOUNT)
+    try:
+        yield register_effect(_StiffMount)
+    finally:
+        unregister_effect(_STIFF_MOUNT.name)
+        catalogue.unregister(_STIFF_MOUNT.name)
+
+
+def test_a_truth_law_registered_at_run_time_runs_through_the_virtual_rig(
+    stiff_mount: type[Effect], rig_run: RunFactory
+) -> None:
+    assert list(EFFECTS)[-1] == "stiff_mount_test_only"
+    assert stiff_mount.signature == _STIFF_MOUNT.signature
+    with pytest.raises(EffectError, match="has a truth law already"):
+        register_effect(_StiffMount)
+    plain = rig_run(**SHORT)
+    effect = parse_effect("stiff_mount_test_only=0.5")
+    run = simulate_rig(plain.plant.rig, [effect], seed_pulsing((1.38e6,), pulsing_s=0.6))
+    assert [effect.name for effect in run.effects] == ["stiff_mount_test_only"]
+    assert np.allclose(run.internals["caliper_force_share"], 1.1, rtol=1e-12)
+    assert np.array_equal(run.measured["p_i"], plain.measured["p_i"])
+    ratio = np.max(np.abs(run.caliper_displacement)) / np.max(np.abs(plain.caliper_displacement))
+    assert 1.05 < ratio < 1.15
+
+
+def test_unregistered_truth_laws_are_gone_and_need_their_catalogue_entry() -> None:
+    assert "stiff_mount_test_only" not in EFFECTS
+    with pytest.raises(EffectError, match="unknown effect"):
+        make_effect("stiff_mount_test_only")
+    with pytest.raises(EffectError, match="unknown effect"):
+        register_effect(_StiffMount)  # its catalogue entry is not registered
 
 
 def test_the_library_holds_every_effect_of_interface_md_and_no_other() -> None:

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from brake_hil.virtual_rig.effects.base import Signal
+from brake_hil.virtual_rig.laws import Signal
 
 
 def maximum(value: Signal, floor: float) -> Signal:

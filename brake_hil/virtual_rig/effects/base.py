@@ -1,15 +1,17 @@
-"""The one small interface every effect of the virtual rig shares.
+"""The one small interface every effect of the virtual rig (a *truth law*) shares.
 
 An effect is a frozen dataclass: a ``strength`` (dimensionless, 0 = the LTI rig, 1 = strong)
 and its own physical parameters, each declared once with unit and bounds in ``parameters``.
-The class docstring's first paragraph is the physical description with its source; the class
-attributes ``signature`` (how it shows in a recording) and ``diagnosis_model`` (the simpler law
-a diagnosis should fit, and where the simulator is richer) document the rest.
+It points to its entry of the effect catalogue (:mod:`brake_hil.physics.catalogue`), which
+gives its ``name`` and ``signature`` (how it shows in a recording). The class docstring's
+first paragraph is the physical description of the truth law with its source;
+``diagnosis_model`` says which simpler law a diagnosis should fit and where the truth law is
+richer.
 
-The simulator calls one hook, :meth:`Effect.install`, which puts the effect's bound law into
-its slot of the :class:`~brake_hil.virtual_rig.plant.Plant` (seal force, line pressure drop,
-compliance, caliper force share, parameter drift, measurement post-processing). An effect at
-strength 0 installs nothing, so the run is identical to the run without it.
+The host calls :meth:`Effect.install` once per run: the effect binds its law
+(:class:`~brake_hil.virtual_rig.laws.TruthLaw`, the hooks of the host's ports it acts on) to
+the truth rig's coefficients. An effect at strength 0 installs nothing, so the run is
+identical to the run without it.
 """
 
 from __future__ import annotations
@@ -17,17 +19,15 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, fields
 import math
-from typing import TYPE_CHECKING, Any, ClassVar, NamedTuple, TypeAlias
+from typing import Any, ClassVar, NamedTuple
+
+import numpy as np
 
 from brake_hil.errors import EffectError
+from brake_hil.physics.catalogue import EffectEntry
+from brake_hil.virtual_rig.laws import LtiPlant, Signal, TruthLaw
 
-if TYPE_CHECKING:
-    from brake_hil.virtual_rig.plant import Plant
-
-
-Signal: TypeAlias = Any
-"""A float or a float array (SI units as stated): every law runs on one state (Python floats,
-the fast path of the solver) or on many at once (arrays: Jacobians, outputs)."""
+__all__ = ["STRENGTH", "Effect", "EffectError", "Parameter", "Signal"]
 
 
 class Parameter(NamedTuple):
@@ -52,10 +52,17 @@ class Effect(ABC):
 
     strength: float = 1.0
 
-    name: ClassVar[str]
+    entry: ClassVar[EffectEntry]  # the catalogue entry this truth law makes recordings of
+    name: ClassVar[str]  # the entry's name
+    signature: ClassVar[str]  # the entry's signature
     parameters: ClassVar[tuple[Parameter, ...]]
-    signature: ClassVar[str]
-    diagnosis_model: ClassVar[str]
+    diagnosis_model: ClassVar[str]  # what a diagnosis fits; where the truth law is richer
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if "entry" in cls.__dict__:
+            cls.name = cls.entry.name
+            cls.signature = cls.entry.signature
 
     def __post_init__(self) -> None:
         declared = {p.name for p in self.parameters}
@@ -112,6 +119,20 @@ class Effect(ABC):
             lines.append(f"  {parameter.name} = {shown}  ({parameter.description})")
         return "\n".join(lines)
 
+    @classmethod
+    def draw(cls, rng: np.random.Generator, strength: float) -> Effect:
+        """The effect at ``strength`` as a benchmark case draws it.
+
+        Each categorical parameter (a channel, say) is drawn uniformly from its choices with
+        ``rng``, in the order declared; the others keep their defaults.
+        """
+        chosen = {p.name: str(rng.choice(p.choices)) for p in cls.parameters if p.choices}
+        return cls(strength=strength, **chosen)  # type: ignore[arg-type]
+
+    def install(self, plant: LtiPlant) -> TruthLaw | None:
+        """This effect's law bound to ``plant``; None when it changes nothing (strength 0)."""
+        return self.law(plant) if self.active else None
+
     @abstractmethod
-    def install(self, plant: Plant) -> Plant:
-        """The plant with this effect's law in its slot (the plant unchanged at strength 0)."""
+    def law(self, plant: LtiPlant) -> TruthLaw:
+        """The truth law at this strength, bound to the truth rig's coefficients."""

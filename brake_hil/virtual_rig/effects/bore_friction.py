@@ -2,23 +2,22 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 
+from brake_hil.physics import catalogue
 from brake_hil.virtual_rig.effects import _math as fm
-from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter, Signal
+from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
 from brake_hil.virtual_rig.effects.seal_stick_slip import smooth_speed
-
-if TYPE_CHECKING:
-    from brake_hil.virtual_rig.plant import Plant
+from brake_hil.virtual_rig.laws import LtiPlant, Signal, State, TruthLaw
 
 _DEFLECTION_SMOOTHING = 1.0e-7
 """Caliper displacement (m) below which ``|x_c|`` is rounded off."""
 
 
 @dataclass(frozen=True)
-class DahlBoreFriction:
-    """Piston-bore friction bound to a rig (SI)."""
+class DahlBoreFriction(TruthLaw):
+    """Piston-bore friction bound to a rig (SI): the host's bore-force port, state ``w``."""
 
     static_coefficient: float  # mu_s, -
     kinetic_ratio: float  # mu_k / mu_s, -
@@ -63,6 +62,27 @@ class DahlBoreFriction:
         )
         return force
 
+    def states(self) -> tuple[State, ...]:
+        """Dahl's normalised pre-sliding state ``w`` (-)."""
+        return (State("w", 1.0),)
+
+    def initial_state(self, equilibrium: Mapping[str, float]) -> tuple[float, ...]:
+        """At rest the contact has not slid: ``w = 0``."""
+        del equilibrium
+        return (0.0,)
+
+    def bore_force(
+        self,
+        velocity: Signal,
+        bore_pressure: Signal,
+        caliper_displacement: Signal,
+        states: Sequence[Signal],
+    ) -> tuple[Signal, list[Signal]]:
+        """Friction on the piston (N) and ``w'`` (1/s)."""
+        w = states[0]
+        force = self.force(w, velocity, bore_pressure, caliper_displacement)
+        return force, [self.state_rate(w, velocity)]
+
 
 @dataclass(frozen=True)
 class BoreFriction(Effect):
@@ -85,7 +105,7 @@ class BoreFriction(Effect):
     kinetic_ratio: float = 0.7
     stribeck_velocity: float = 1.0e-3
 
-    name = "bore_friction"
+    entry = catalogue.entry("bore_friction")
     parameters = (
         STRENGTH,
         Parameter("guide_length", "m", 1.0e-3, 0.05, "l_g, arm of the cocking couple"),
@@ -93,18 +113,13 @@ class BoreFriction(Effect):
         Parameter("kinetic_ratio", "-", 0.3, 1.0, "mu_k / mu_s"),
         Parameter("stribeck_velocity", "m/s", 1.0e-5, 0.1, "v_S of the Stribeck curve"),
     )
-    signature = (
-        "more damping: c_eh and eta_eh from characterize above the prediction, the seal loop "
-        "fatter with square corners at the turning points; x_c and F_k peak-to-peak slightly "
-        "lower; the extra damping grows with pressure (p_b x_c)"
-    )
     diagnosis_model = (
         "ideal Coulomb friction F = mu N sign(x_s') with N ~ p_b |x_c| (eqs. 8-9) or its "
         "equivalent viscous c_fb; the simulator has pre-sliding (Dahl), a Stribeck "
         "coefficient and the guide-length arm"
     )
 
-    def law(self, plant: Plant) -> DahlBoreFriction:
+    def law(self, plant: LtiPlant) -> DahlBoreFriction:
         """The friction of the plant's truth bore at this strength."""
         rig = plant.rig
         return DahlBoreFriction(
@@ -116,8 +131,8 @@ class BoreFriction(Effect):
             bore_area=plant.params.bore_area,
         )
 
-    def install(self, plant: Plant) -> Plant:
-        """Seal-force slot: friction in parallel with the seals."""
+    def install(self, plant: LtiPlant) -> DahlBoreFriction | None:
+        """Bore-force port: friction in parallel with the seals (none on a frictionless bore)."""
         if not self.active or plant.rig.bore_friction_coefficient == 0.0:
-            return plant
-        return replace(plant, bore_friction=self.law(plant))
+            return None
+        return self.law(plant)

@@ -2,25 +2,24 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
+from dataclasses import dataclass
 
+from brake_hil.physics import catalogue
 from brake_hil.virtual_rig.effects import _math as fm
-from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter, Signal
-
-if TYPE_CHECKING:
-    from brake_hil.virtual_rig.plant import Plant
+from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
+from brake_hil.virtual_rig.laws import LtiPlant, Signal, TruthLaw
 
 
 @dataclass(frozen=True)
-class LoadDependentShare:
-    """Share of ``A_eb p_b`` that reaches the caliper, as a function of that force."""
+class LoadDependentShare(TruthLaw):
+    """Share of ``A_eb p_b`` that reaches the caliper, as a function of that force: the
+    host's caliper-share port."""
 
     unloaded_change: float  # -, share - 1 at zero force
     loaded_change: float  # -, share - 1 at large force
     seating_force: float  # N, force at which half the change has gone
 
-    def share(self, pressure_force: Signal) -> Signal:
+    def caliper_share(self, pressure_force: Signal) -> Signal:
         """``1 + d_1 + (d_0 - d_1) F_0 / (F_0 + F)`` (-) for the force ``F = A_eb p_b`` (N)."""
         force = fm.maximum(pressure_force, 0.0)
         share: Signal = (
@@ -53,16 +52,12 @@ class EccentricLoad(Effect):
     loaded_share_change: float = -0.05
     seating_force: float = 3000.0
 
-    name = "eccentric_load"
+    entry = catalogue.entry("eccentric_load")
     parameters = (
         STRENGTH,
         Parameter("unloaded_share_change", "-", -0.6, 0.6, "d_0 at strength 1 (share - 1)"),
         Parameter("loaded_share_change", "-", -0.6, 0.6, "d_1 at strength 1 (share - 1)"),
         Parameter("seating_force", "N", 100.0, 1.0e5, "F_0 of the seating law"),
-    )
-    signature = (
-        "x_c peak-to-peak and mean off the prediction (over-predicted for d < 0), most at "
-        "low pressure; p_b and F_k almost unchanged; x_c's phase unchanged"
     )
     diagnosis_model = (
         "a constant caliper force share (A_eb replaced by lambda A_eb, eq. 22c); the "
@@ -70,16 +65,11 @@ class EccentricLoad(Effect):
         "its mean share and both change with pressure"
     )
 
-    def law(self) -> LoadDependentShare:
-        """The seating law at this strength."""
+    def law(self, plant: LtiPlant) -> LoadDependentShare:
+        """The seating law at this strength (caliper-share port; the same on every rig)."""
+        del plant
         return LoadDependentShare(
             unloaded_change=self.strength * self.unloaded_share_change,
             loaded_change=self.strength * self.loaded_share_change,
             seating_force=self.seating_force,
         )
-
-    def install(self, plant: Plant) -> Plant:
-        """Caliper-force slot: the load-dependent share."""
-        if not self.active:
-            return plant
-        return replace(plant, force_share=self.law())

@@ -2,22 +2,21 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
+from dataclasses import dataclass
 
+from brake_hil.physics import catalogue
 from brake_hil.virtual_rig.effects import _math as fm
-from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter, Signal
-
-if TYPE_CHECKING:
-    from brake_hil.virtual_rig.plant import Plant
+from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
+from brake_hil.virtual_rig.laws import LtiPlant, Signal, TruthLaw
 
 ATMOSPHERIC_PRESSURE = 101_325.0
 """Absolute pressure (Pa) at zero gauge pressure, where the free-air fraction is given."""
 
 
 @dataclass(frozen=True)
-class PolytropicAir:
-    """Free air bound to a strength: compliance per unit fluid volume (1/Pa)."""
+class PolytropicAir(TruthLaw):
+    """Free air bound to a strength: compliance per unit fluid volume (1/Pa), the host's
+    specific-compliance port (every chamber and line node)."""
 
     free_air_fraction: float  # alpha_0, -, free-gas volume share at atmospheric pressure
     polytropic_index: float  # n, -
@@ -59,17 +58,12 @@ class EntrainedAir(Effect):
     polytropic_index: float = 1.2
     dissolution_pressure: float = 5.0e6
 
-    name = "entrained_air"
+    entry = catalogue.entry("entrained_air")
     parameters = (
         STRENGTH,
         Parameter("free_air_fraction", "-", 1.0e-4, 0.1, "alpha_0 at strength 1, at atmospheric"),
         Parameter("polytropic_index", "-", 1.0, 1.4, "n: 1 isothermal, 1.4 adiabatic"),
         Parameter("dissolution_pressure", "Pa", 5.0e5, 1.0e8, "p_d of the dissolved share"),
-    )
-    signature = (
-        "p_b lower and later than predicted at low pressure (first segment, ramp start), "
-        "the mismatch shrinking as the maximum pressure grows; p_b's waveform flattened at "
-        "its troughs (a 2nd harmonic); the ramp's start delayed"
     )
     diagnosis_model = (
         "isothermal air, beta_e(p) from eq. 18 with beta_a = p (gauge or absolute) and a "
@@ -77,16 +71,11 @@ class EntrainedAir(Effect):
         "pressure and lets the free-air fraction fall with pressure (Henry's law)"
     )
 
-    def law(self) -> PolytropicAir:
-        """The free-air law at this strength."""
+    def law(self, plant: LtiPlant) -> PolytropicAir:
+        """The free-air law at this strength (the same on every rig)."""
+        del plant
         return PolytropicAir(
             free_air_fraction=self.strength * self.free_air_fraction,
             polytropic_index=self.polytropic_index,
             dissolution_pressure=self.dissolution_pressure,
         )
-
-    def install(self, plant: Plant) -> Plant:
-        """Compliance slot: free air in every fluid volume."""
-        if not self.active:
-            return plant
-        return replace(plant, air=self.law())

@@ -2,21 +2,21 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, EffectError, Parameter, Signal
-
-if TYPE_CHECKING:
-    from brake_hil.virtual_rig.plant import Plant
+from brake_hil.physics import catalogue
+from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, EffectError, Parameter
+from brake_hil.virtual_rig.laws import LineFlow, LtiPlant, Signal, State, TruthLaw
 
 
 @dataclass(frozen=True)
-class HoseLadder:
-    """The line as an RC ladder: pipe and valve, then ``N`` hose segments, bound to a rig.
+class HoseLadder(TruthLaw):
+    """The line as an RC ladder: pipe and valve, then ``N`` hose segments, bound to a rig (the
+    host's line port, the node pressures its states).
 
     Node ``j`` (``0 .. N-1``) sits before hose segment ``j + 1`` (resistance ``R_t / N``);
     node 0 is the valve outlet and carries the hard pipe's compliance. The bore end of the
@@ -49,6 +49,42 @@ class HoseLadder:
         )
         return compliance
 
+    def states(self) -> tuple[State, ...]:
+        """The node pressures ``p_n0 .. p_n(N-1)`` (Pa)."""
+        return tuple(State(f"p_n{node}", 1e6) for node in range(self.segment_count))
+
+    def initial_state(self, equilibrium: Mapping[str, float]) -> tuple[float, ...]:
+        """At rest every node is at the bore pressure."""
+        return tuple(equilibrium["p_b"] for _ in range(self.segment_count))
+
+    def line_flow(
+        self,
+        master_pressure: Signal,
+        bore_pressure: Signal,
+        flow: Signal,
+        upstream_drop: Signal,
+        hose_resistance: Signal,
+        inertance: float,
+        fluid_compliance: Signal,
+        extra_compliance: Callable[[Signal], Signal] | None,
+        states: Sequence[Signal],
+    ) -> LineFlow:
+        """Pipe and valve into node 0, then the hose segments node to node into the bore."""
+        count = self.segment_count
+        segment_resistance = hose_resistance / count
+        fluid, extra, nodes = fluid_compliance, extra_compliance, states
+        flow_rate = (master_pressure - nodes[0] - upstream_drop) / inertance
+        inflow = flow
+        rates: list[Signal] = []
+        for node in range(count):
+            downstream = nodes[node + 1] if node + 1 < count else bore_pressure
+            outflow = (nodes[node] - downstream) / segment_resistance
+            node_fluid = fluid if extra is None else fluid + extra(nodes[node])
+            rates.append((inflow - outflow) / self.node_compliance(node, node_fluid))
+            inflow = outflow
+        bore_fluid = fluid if extra is None else fluid + extra(bore_pressure)
+        return flow_rate, rates, inflow, self.bore_end_compliance(bore_fluid)
+
 
 @dataclass(frozen=True)
 class HoseCompliance(Effect):
@@ -69,15 +105,11 @@ class HoseCompliance(Effect):
     hose_expansion: float = 2.0e-13
     segments: int = 4
 
-    name = "hose_compliance"
+    entry = catalogue.entry("hose_compliance")
     parameters = (
         STRENGTH,
         Parameter("hose_expansion", "m^3/(Pa m)", 1.0e-14, 1.0e-12, "e_h, hose swell"),
         Parameter("segments", "-", 1, 16, "N, lumped hose segments"),
-    )
-    signature = (
-        "p_b lags p_i more and its peak-to-peak is lower than predicted, more at higher "
-        "frequency (sweep); F_k and x_c follow p_b; the mismatch hardly depends on pressure"
     )
     diagnosis_model = (
         "one lumped RC stage (a single extra compliance between the valve and the bore); "
@@ -89,7 +121,7 @@ class HoseCompliance(Effect):
         if int(self.segments) != self.segments:
             raise EffectError(f"effect {self.name}: segments = {self.segments!r} is not whole")
 
-    def law(self, plant: Plant) -> HoseLadder:
+    def law(self, plant: LtiPlant) -> HoseLadder:
         """The ladder of the plant's truth line at this strength."""
         rig = plant.rig
         count = int(self.segments)
@@ -112,9 +144,3 @@ class HoseCompliance(Effect):
             bore_end_volume=0.5 * hose_volume / count,
             bore_end_wall_compliance=0.5 * hose_wall / count,
         )
-
-    def install(self, plant: Plant) -> Plant:
-        """Line slot: the ladder replaces the lumped line."""
-        if not self.active:
-            return plant
-        return replace(plant, line=self.law(plant))

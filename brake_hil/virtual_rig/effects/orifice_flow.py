@@ -4,15 +4,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
 
+from brake_hil.physics import catalogue
 from brake_hil.virtual_rig.effects import _math as fm
-from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter, Signal
-
-if TYPE_CHECKING:
-    from brake_hil.virtual_rig.plant import Plant
+from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
+from brake_hil.virtual_rig.laws import LtiPlant, Signal, TruthLaw
 
 _QUADRATURE_POINTS = 512
 
@@ -25,11 +23,11 @@ def _square_gain(ratio: Signal) -> Signal:
 
 
 @dataclass(frozen=True)
-class OrificeValve:
-    """Needle valve bound to a rig: linear share plus a Reynolds-dependent orifice."""
+class OrificeValve(TruthLaw):
+    """Needle valve bound to a rig: linear share plus a Reynolds-dependent orifice (the
+    host's valve-drop port)."""
 
     share: float  # s, -, orifice share of the linearised resistance
-    linear_resistance: float  # R_v, Pa s/m^3
     flow_coefficient: float  # K = rho / (2 C_d_inf^2 A_o^2), Pa s^2/m^6
     transition_flow: float  # Q_t, m^3/s, flow at the transition Reynolds number
 
@@ -40,13 +38,18 @@ class OrificeValve:
         drop: Signal = self.flow_coefficient * transition * flow * _square_gain(ratio)
         return drop
 
-    def pressure_drop(
-        self, flow: Signal, viscosity_factor: Signal, linear_factor: Signal
+    def valve_drop(
+        self,
+        flow: Signal,
+        linear_resistance: float,
+        viscosity_factor: Signal,
+        linear_factor: Signal,
     ) -> Signal:
-        """Valve drop (Pa): ``(1 - s) R_v Q + s dp_orifice(Q)``."""
+        """Valve drop (Pa): ``(1 - s) R_v Q + s dp_orifice(Q)``, ``R_v`` the rig's linearised
+        resistance (Pa s/m^3)."""
         drop: Signal = (
             1.0 - self.share
-        ) * self.linear_resistance * linear_factor * flow + self.share * self.orifice_drop(
+        ) * linear_resistance * linear_factor * flow + self.share * self.orifice_drop(
             flow, viscosity_factor
         )
         return drop
@@ -83,17 +86,12 @@ class OrificeFlow(Effect):
     orifice_diameter: float = 6.0e-4
     transition_reynolds: float = 50.0
 
-    name = "orifice_flow"
+    entry = catalogue.entry("orifice_flow")
     parameters = (
         STRENGTH,
         Parameter("reference_flow", "m^3/s", 1.0e-7, 1.0e-4, "flow amplitude at which R_v holds"),
         Parameter("orifice_diameter", "m", 1.0e-4, 3.0e-3, "d_o of the valve's jet"),
         Parameter("transition_reynolds", "-", 1.0, 2000.0, "Re_t of the C_d(Re) curve"),
-    )
-    signature = (
-        "p_b peak-to-peak falls short of the prediction more as the flow amplitude grows "
-        "(larger pressure amplitude, higher excitation frequency); p_b lags more at large "
-        "amplitude; a 3rd harmonic in p_b that p_i lacks"
     )
     diagnosis_model = (
         "a pure quadratic valve dp = K Q |Q| (plus the linear line resistance); the simulator's "
@@ -101,17 +99,11 @@ class OrificeFlow(Effect):
         "only a share of the valve is an orifice"
     )
 
-    def law(self, plant: Plant) -> OrificeValve:
+    def law(self, plant: LtiPlant) -> OrificeValve:
         """The valve of the plant's truth rig at this strength."""
         fluid = plant.rig.fluid
         kinematic = fluid.viscosity / fluid.density
         transition = self.transition_reynolds * math.pi * self.orifice_diameter * kinematic / 4.0
-        unit = OrificeValve(self.strength, plant.valve_resistance, 1.0, transition)
+        unit = OrificeValve(self.strength, 1.0, transition)
         gain = describing_function_resistance(unit, self.reference_flow)
         return replace(unit, flow_coefficient=plant.valve_resistance / gain)
-
-    def install(self, plant: Plant) -> Plant:
-        """Line-drop slot: the needle valve's law."""
-        if not self.active:
-            return plant
-        return replace(plant, valve=self.law(plant))

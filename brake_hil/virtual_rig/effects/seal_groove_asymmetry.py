@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 
+from brake_hil.physics import catalogue
 from brake_hil.virtual_rig.effects import _math as fm
-from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter, Signal
+from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
+from brake_hil.virtual_rig.laws import LtiPlant, Signal, State, TruthLaw
 
-if TYPE_CHECKING:
-    from brake_hil.virtual_rig.plant import Plant
+SWITCH_WIDTH = 1.0e-6
+"""Width (m) of the spring's smooth switch between its apply and release stiffness."""
 
 
 def asymmetric_spring(deflection: Signal, asymmetry: float, width: float) -> Signal:
@@ -17,6 +19,37 @@ def asymmetric_spring(deflection: Signal, asymmetry: float, width: float) -> Sig
     (``e > 0``) as on average and ``(1 + a)`` on the release side: ``e - a e tanh(e / w)``."""
     effective: Signal = deflection - asymmetry * deflection * fm.tanh(deflection / width)
     return effective
+
+
+@dataclass(frozen=True)
+class GrooveAsymmetry(TruthLaw):
+    """The groove's asymmetry bound to a strength: the host's spring-deflection port (state
+    ``x_r``, the seal's relaxed position) and the seal's apply/release asymmetry."""
+
+    asymmetry: float  # a, -
+    relaxation_time: float  # tau_r, s
+    width: float = SWITCH_WIDTH  # w, m
+
+    def states(self) -> tuple[State, ...]:
+        """The seal's relaxed position ``x_r`` (m)."""
+        return (State("x_r", 1e-5),)
+
+    def initial_state(self, equilibrium: Mapping[str, float]) -> tuple[float, ...]:
+        """At rest the seal is relaxed where it sits."""
+        return (equilibrium["seal_displacement"],)
+
+    def seal_asymmetry(self) -> float:
+        """``a``, for a frictional seal's slip threshold."""
+        return self.asymmetry
+
+    def spring_deflection(
+        self, seal_displacement: Signal, states: Sequence[Signal]
+    ) -> tuple[Signal, list[Signal]]:
+        """``x_r + e - a e tanh(e / w)`` (m) with ``e = x_s - x_r``, and ``x_r' = e / tau_r``."""
+        relaxed = states[0]
+        deflection = seal_displacement - relaxed
+        effective = relaxed + asymmetric_spring(deflection, self.asymmetry, self.width)
+        return effective, [deflection / self.relaxation_time]
 
 
 @dataclass(frozen=True)
@@ -38,15 +71,11 @@ class SealGrooveAsymmetry(Effect):
     asymmetry: float = 0.4
     relaxation_time: float = 1.0
 
-    name = "seal_groove_asymmetry"
+    entry = catalogue.entry("seal_groove_asymmetry")
     parameters = (
         STRENGTH,
         Parameter("asymmetry", "-", 0.05, 0.8, "a at strength 1: apply (1 - a), release (1 + a)"),
         Parameter("relaxation_time", "s", 0.05, 20.0, "tau_r, creep of the relaxed position"),
-    )
-    signature = (
-        "an even (2nd) harmonic in x_c and F_k that p_i lacks, a lopsided x_c waveform "
-        "(apply half longer than release half), the mean x_c shifted from the static value"
     )
     diagnosis_model = (
         "a bilinear seal stiffness (k_apply, k_release) switching on the sign of the seal "
@@ -54,13 +83,7 @@ class SealGrooveAsymmetry(Effect):
         "about a creeping relaxed position, not on the velocity"
     )
 
-    def install(self, plant: Plant) -> Plant:
-        """Seal slot: asymmetry ``strength * asymmetry`` with its relaxation time."""
-        if not self.active:
-            return plant
-        seal = replace(
-            plant.seal,
-            asymmetry=self.strength * self.asymmetry,
-            relaxation_time=self.relaxation_time,
-        )
-        return replace(plant, seal=seal)
+    def law(self, plant: LtiPlant) -> GrooveAsymmetry:
+        """Asymmetry ``strength * asymmetry`` with its relaxation time (the same on every rig)."""
+        del plant
+        return GrooveAsymmetry(self.strength * self.asymmetry, self.relaxation_time)

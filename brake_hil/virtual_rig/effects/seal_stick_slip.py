@@ -2,16 +2,17 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 import math
-from typing import TYPE_CHECKING
 
+import numpy as np
+
+from brake_hil.physics import catalogue
 from brake_hil.physics.parameters import seal_properties
 from brake_hil.virtual_rig.effects import _math as fm
-from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter, Signal
-
-if TYPE_CHECKING:
-    from brake_hil.virtual_rig.plant import Plant
+from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
+from brake_hil.virtual_rig.laws import LtiPlant, Signal, State, TruthLaw
 
 SPEED_SMOOTHING = 2.0e-5
 """Velocity (m/s) below which ``|v|`` is rounded off, ``sqrt(v^2 + e^2) - e``."""
@@ -25,8 +26,9 @@ def smooth_speed(velocity: Signal) -> Signal:
 
 
 @dataclass(frozen=True)
-class LuGreSeal:
-    """LuGre friction law of both seals together, bound to a rig (SI)."""
+class LuGreSeal(TruthLaw):
+    """LuGre friction law of both seals together, bound to a rig (SI): the host's seal-force
+    port (state ``z``, the seals' shear deflection) and structural damping."""
 
     bristle_stiffness: float  # sigma_0 = 2 k_s, N/m
     static_force: float  # F_S = 2 F_fs, N
@@ -34,6 +36,9 @@ class LuGreSeal:
     stribeck_velocity: float  # v_S, m/s
     microdamping: float  # sigma_1, N s/m
     viscous_friction: float  # sigma_2, N s/m
+    share: float = 1.0  # -, share of the seal force this law carries (the rest: k_eh, c_eh)
+    caliper_damping: float = 0.0  # N s/m, caliper to ground, kept where c_eh is replaced
+    block_damping: float = 0.0  # N s/m, piston to block (load cells)
 
     def slip_force(
         self, velocity: Signal, deflection: Signal, asymmetry: float, modulus_factor: Signal
@@ -71,6 +76,40 @@ class LuGreSeal:
             + self.viscous_friction * viscosity_factor * velocity
         )
 
+    def states(self) -> tuple[State, ...]:
+        """The seals' shear deflection ``z`` (m)."""
+        return (State("z", 1e-5),)
+
+    def initial_state(self, equilibrium: Mapping[str, float]) -> tuple[float, ...]:
+        """At rest the seals are sheared by the seal displacement, below their slip limit."""
+        limit = 0.99 * self.coulomb_force / self.bristle_stiffness
+        return (float(np.clip(equilibrium["seal_displacement"], -limit, limit)),)
+
+    def spring_share(self) -> float:
+        """What the equivalent spring and damper keep: ``1 - share``."""
+        return 1.0 - self.share
+
+    def seal_force(
+        self,
+        spring_force: Signal,
+        velocity: Signal,
+        asymmetry: float,
+        modulus_factor: Signal,
+        viscosity_factor: Signal,
+        states: Sequence[Signal],
+    ) -> tuple[Signal, list[Signal]]:
+        """``(1 - share) F_spring + share F_LuGre`` (N), and ``z'`` (m/s)."""
+        z = states[0]
+        slip = self.slip_force(velocity, z, asymmetry, modulus_factor)
+        z_rate = self.deflection_rate(z, velocity, slip, modulus_factor)
+        friction = self.force(z, z_rate, velocity, modulus_factor, viscosity_factor)
+        force = (1.0 - self.share) * spring_force + self.share * friction
+        return force, [z_rate]
+
+    def structural_damping(self) -> tuple[float, float]:
+        """Caliper to ground and piston to block (N s/m)."""
+        return self.caliper_damping, self.block_damping
+
 
 @dataclass(frozen=True)
 class SealStickSlip(Effect):
@@ -103,7 +142,7 @@ class SealStickSlip(Effect):
     viscous_friction: float = 500.0
     structural_damping_ratio: float = 0.1
 
-    name = "seal_stick_slip"
+    entry = catalogue.entry("seal_stick_slip")
     parameters = (
         STRENGTH,
         Parameter("coulomb_ratio", "-", 0.3, 1.0, "kinetic over static threshold F_C / F_S"),
@@ -112,23 +151,20 @@ class SealStickSlip(Effect):
         Parameter("viscous_friction", "N s/m", 0.0, 1.0e4, "sigma_2, lubricant film, both seals"),
         Parameter("structural_damping_ratio", "-", 0.0, 0.3, "zeta of caliper and load cells"),
     )
-    signature = (
-        "k_eh from characterize falls as the pressure amplitude grows (the seal slips more); "
-        "x_c's 2nd-3rd harmonic share grows from p_i to x_c; the seal loop (A_ep p_b - F_k "
-        "over F_k/k_k - x_c) has flat slipping edges; at low amplitude the rig is stiffer "
-        "(x_c smaller) than the seed's k_eh* = 0.29"
-    )
     diagnosis_model = (
         "an ideal Jenkins element per seal: spring k_s in series with a rate-independent "
         "Coulomb slider F_fs; the simulator's law is smooth, rate dependent (Stribeck drop to "
         "F_C, viscous sigma_2, microdamping sigma_1) and creeps below the threshold"
     )
 
-    def law(self, plant: Plant) -> LuGreSeal:
-        """The LuGre law of the plant's truth seals (both together)."""
+    def law(self, plant: LtiPlant) -> LuGreSeal:
+        """The LuGre law of the plant's truth seals (both together), carrying ``strength`` of
+        the seal force, with the structural damping it keeps."""
         seal = seal_properties(plant.rig)
         stiffness = 2.0 * seal.static_stiffness
         static = 2.0 * seal.friction_threshold
+        params = plant.params
+        ratio = 2.0 * self.strength * self.structural_damping_ratio
         return LuGreSeal(
             bristle_stiffness=stiffness,
             static_force=static,
@@ -138,19 +174,7 @@ class SealStickSlip(Effect):
             * self.microdamping_ratio
             * math.sqrt(stiffness * plant.params.piston_mass),
             viscous_friction=self.viscous_friction,
-        )
-
-    def install(self, plant: Plant) -> Plant:
-        """Seal slot: the LuGre law carries ``strength`` of the seal force."""
-        if not self.active:
-            return plant
-        params = plant.params
-        ratio = 2.0 * self.strength * self.structural_damping_ratio
-        seal = replace(
-            plant.seal,
-            friction=self.law(plant),
-            friction_share=self.strength,
+            share=self.strength,
             caliper_damping=ratio * math.sqrt(params.caliper_stiffness * params.caliper_mass),
             block_damping=ratio * math.sqrt(params.block_stiffness * params.piston_mass),
         )
-        return replace(plant, seal=seal)

@@ -2,25 +2,24 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.interpolate import CubicSpline
 from scipy.signal import lfilter
 
+from brake_hil.physics import catalogue
 from brake_hil.types import FloatArray
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
-
-if TYPE_CHECKING:
-    from brake_hil.virtual_rig.plant import Plant
+from brake_hil.virtual_rig.laws import LtiPlant, TruthLaw
 
 CHANNELS = ("p_i", "p_b", "F_k", "x_c")
 
 
 @dataclass(frozen=True)
-class ChannelSkew:
-    """A channel's acquisition path: a fractional delay then a first-order low-pass (SI)."""
+class ChannelSkew(TruthLaw):
+    """A channel's acquisition path: a fractional delay then a first-order low-pass (SI),
+    the host's acquisition port."""
 
     channel: str  # p_i, p_b, F_k or x_c
     delay: float  # s, pure (fractional) delay
@@ -54,6 +53,10 @@ class ChannelSkew:
         )
         return np.asarray(filtered, dtype=float)
 
+    def acquisition(self, channel: str, time: FloatArray, values: FloatArray) -> FloatArray:
+        """The skewed channel through :meth:`apply`; the others unchanged."""
+        return self.apply(time, values) if channel == self.channel else values
+
 
 @dataclass(frozen=True)
 class SensorDelay(Effect):
@@ -74,34 +77,24 @@ class SensorDelay(Effect):
     delay: float = 4.0e-3
     filter_share: float = 0.25
 
-    name = "sensor_delay"
+    entry = catalogue.entry("sensor_delay")
     parameters = (
         STRENGTH,
         Parameter("channel", "channel", 0.0, 0.0, "the skewed channel", choices=CHANNELS),
         Parameter("delay", "s", 1.0e-4, 0.05, "total low-frequency lag at strength 1"),
         Parameter("filter_share", "-", 0.0, 0.9, "share of the lag from the low-pass"),
     )
-    signature = (
-        "one channel's tau / T offset from the prediction by delay / T, the same in every "
-        "segment and at every pressure; its peak-to-peak unchanged; the lag grows in phase "
-        "with frequency (a sweep shows a constant time shift)"
-    )
     diagnosis_model = (
         "a pure time shift of one channel; the simulator adds a first-order low-pass, so the "
         "phase lag is not exactly linear in frequency and the amplitude falls slightly"
     )
 
-    def law(self) -> ChannelSkew:
-        """The acquisition path at this strength."""
+    def law(self, plant: LtiPlant) -> ChannelSkew:
+        """The acquisition path at this strength (the same on every rig)."""
+        del plant
         lag = self.strength * self.delay
         return ChannelSkew(
             channel=self.channel,
             delay=lag * (1.0 - self.filter_share),
             time_constant=lag * self.filter_share,
         )
-
-    def install(self, plant: Plant) -> Plant:
-        """Measurement slot: the skewed channel's acquisition path."""
-        if not self.active:
-            return plant
-        return replace(plant, skews=(*plant.skews, self.law()))

@@ -2,17 +2,15 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
+from dataclasses import dataclass
 
 import numpy as np
 
+from brake_hil.physics import catalogue
 from brake_hil.physics.measurement import SENSORS
 from brake_hil.types import FloatArray
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
-
-if TYPE_CHECKING:
-    from brake_hil.virtual_rig.plant import Plant
+from brake_hil.virtual_rig.laws import LtiPlant, TruthLaw
 
 NONLINEAR_CHANNELS = ("F_k",)
 """Only the load cell: a displacement probe whose gain grows with its reading is, seen from
@@ -21,8 +19,9 @@ scale ``x_c`` by ``1 + c p_b``), so it would not be out of the library."""
 
 
 @dataclass(frozen=True)
-class QuadraticGain:
-    """A channel read through ``v (1 + curvature v / full_scale)`` (SI)."""
+class QuadraticGain(TruthLaw):
+    """A channel read through ``v (1 + curvature v / full_scale)`` (SI), the host's
+    acquisition port."""
 
     channel: str  # F_k
     curvature: float  # -, gain change at full scale
@@ -32,6 +31,10 @@ class QuadraticGain:
         """The channel as the transducer reports it (``time`` unused: a static law)."""
         del time
         return np.asarray(values * (1.0 + self.curvature * values / self.full_scale), dtype=float)
+
+    def acquisition(self, channel: str, time: FloatArray, values: FloatArray) -> FloatArray:
+        """The transducer's channel through :meth:`apply`; the others unchanged."""
+        return self.apply(time, values) if channel == self.channel else values
 
 
 @dataclass(frozen=True)
@@ -49,29 +52,20 @@ class SensorNonlinearity(Effect):
     channel: str = "F_k"
     curvature: float = 0.3
 
-    name = "sensor_nonlinearity"
+    entry = catalogue.entry("sensor_nonlinearity")
     parameters = (
         STRENGTH,
         Parameter("channel", "channel", 0.0, 0.0, "the channel read", choices=NONLINEAR_CHANNELS),
         Parameter("curvature", "-", 0.0, 1.0, "gain change at full scale, at strength 1"),
     )
-    signature = (
-        "one output's amplitude ratio to the others grows with the pressure; its phase and "
-        "the other channels unchanged"
-    )
     diagnosis_model = "none in the library (labelled unexplained)"
 
-    def law(self) -> QuadraticGain:
-        """The transducer's law at this strength."""
+    def law(self, plant: LtiPlant) -> QuadraticGain:
+        """The transducer's law at this strength (the same on every rig)."""
+        del plant
         sensor = SENSORS[self.channel]
         return QuadraticGain(
             channel=self.channel,
             curvature=self.strength * self.curvature,
             full_scale=max(abs(sensor.low), abs(sensor.high)),
         )
-
-    def install(self, plant: Plant) -> Plant:
-        """Measurement slot: the channel's transducer law."""
-        if not self.active:
-            return plant
-        return replace(plant, skews=(*plant.skews, self.law()))

@@ -2,21 +2,21 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
+from collections.abc import Sequence
+from dataclasses import dataclass
 
+from brake_hil.physics import catalogue
 from brake_hil.virtual_rig.effects import _math as fm
-from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter, Signal
-
-if TYPE_CHECKING:
-    from brake_hil.virtual_rig.plant import Plant
+from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
+from brake_hil.virtual_rig.laws import LtiPlant, Signal, TruthLaw
 
 _LOWEST_MODULUS_FACTOR = 0.2
 
 
 @dataclass(frozen=True)
-class HeatingLaw:
-    """Temperature and the parameter factors it drives, as functions of time (SI)."""
+class HeatingLaw(TruthLaw):
+    """Temperature and the parameter factors it drives, as functions of time (SI): the
+    host's drift port."""
 
     ambient_temperature: float  # T_0, K
     temperature_rise: float  # dT, K (already scaled by strength)
@@ -45,7 +45,7 @@ class HeatingLaw:
         factor: Signal = fm.maximum(1.0 + change, _LOWEST_MODULUS_FACTOR)
         return factor
 
-    def factors(self, time: Signal) -> tuple[Signal, Signal, Signal]:
+    def drift_factors(self, time: Signal) -> tuple[Signal, Signal, Signal]:
         """Viscosity, seal-modulus and valve factors at ``time`` (s), one temperature."""
         temperature = self.temperature(time)
         inverse = 1.0 / temperature - 1.0 / self.ambient_temperature
@@ -58,6 +58,11 @@ class HeatingLaw:
         """Factor on the linearised valve resistance, ``(mu / mu_0)^chi``."""
         factor: Signal = self.viscosity_factor(time) ** self.valve_viscosity_exponent
         return factor
+
+    def internals(self, time: Signal, states: Sequence[Signal]) -> dict[str, Signal]:
+        """The temperature (K)."""
+        del states
+        return {"temperature": self.temperature(time)}
 
 
 @dataclass(frozen=True)
@@ -82,7 +87,7 @@ class ThermalDrift(Effect):
     valve_viscosity_exponent: float = 0.5
     ambient_temperature: float = 293.15
 
-    name = "thermal_drift"
+    entry = catalogue.entry("thermal_drift")
     parameters = (
         STRENGTH,
         Parameter("temperature_rise", "K", 1.0, 80.0, "dT at strength 1"),
@@ -92,19 +97,15 @@ class ThermalDrift(Effect):
         Parameter("valve_viscosity_exponent", "-", 0.0, 1.0, "chi, valve's viscous share"),
         Parameter("ambient_temperature", "K", 250.0, 350.0, "T_0 at the start"),
     )
-    signature = (
-        "a mismatch that grows over the recording: per-cycle x_c and F_k peak-to-peak "
-        "creeping (softer seal), p_b leading more (lower line resistance); the same pressure "
-        "segment repeated late does not match its early twin"
-    )
     diagnosis_model = (
         "parameters (k_eh, c_eh, line resistance) drifting linearly or exponentially in time; "
         "the simulator drives them from one temperature through Andrade's exponential law and "
         "a linear seal-modulus coefficient"
     )
 
-    def law(self) -> HeatingLaw:
-        """The heating law at this strength."""
+    def law(self, plant: LtiPlant) -> HeatingLaw:
+        """The heating law at this strength (the same on every rig)."""
+        del plant
         return HeatingLaw(
             ambient_temperature=self.ambient_temperature,
             temperature_rise=self.strength * self.temperature_rise,
@@ -113,9 +114,3 @@ class ThermalDrift(Effect):
             seal_modulus_coefficient=self.seal_modulus_coefficient,
             valve_viscosity_exponent=self.valve_viscosity_exponent,
         )
-
-    def install(self, plant: Plant) -> Plant:
-        """Drift slot: the heating law."""
-        if not self.active:
-            return plant
-        return replace(plant, drift=self.law())
