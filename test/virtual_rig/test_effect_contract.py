@@ -8,12 +8,12 @@ import re
 import numpy as np
 import pytest
 
-from brake_hil.topics import EFFECT_NAMES
+from brake_hil.physics.catalogue import effect_names
 from brake_hil.virtual_rig import EFFECTS, EffectError, make_effect, parse_effect
 from brake_hil.virtual_rig.effects import OUT_OF_LIBRARY, Effect
 from test.virtual_rig.conftest import RunFactory
 
-INTERFACE_EFFECTS = EFFECT_NAMES  # interface.md's effect table, less "unexplained"
+INTERFACE_EFFECTS = effect_names()  # interface.md's effect table, less "unexplained"
 ALL_EFFECTS = {**EFFECTS, **OUT_OF_LIBRARY}
 EVERY_EFFECT = (*INTERFACE_EFFECTS, *OUT_OF_LIBRARY)  # the out-of-library ones keep it too
 SHORT = {"max_pressures": (1.38e6,), "pulsing_s": 0.6}
