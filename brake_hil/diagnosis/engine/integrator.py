@@ -18,7 +18,6 @@ from brake_hil.diagnosis.engine.plant import (
 )
 from brake_hil.diagnosis.engine.terms import Entry, ModelSpec, Step
 from brake_hil.physics.lti_model import DiscreteModel, simulate
-from brake_hil.physics.parameters import ModelParameters
 from brake_hil.types import FloatArray, IndexArray
 
 __all__ = ["Integrator", "simulate_batch"]
@@ -122,7 +121,8 @@ class Integrator:
         start_time: float = 0.0,
     ) -> None:
         terms = spec.terms
-        self.spec, self._sample_time, self.block_s = spec, sample_time, block_s
+        self.spec, self.params = spec, spec.params
+        self.sample_time, self.block_s = sample_time, block_s
         self.start_time, self.levels = start_time, pressure_levels
         self.on_pressure = any(t.pressure_scheduled for t in terms)
         self.on_time = any(t.time_scheduled for t in terms)
@@ -146,6 +146,7 @@ class Integrator:
             [-np.linalg.solve(t.plant.A, t.plant.B * first_pressure) for t in tables]
         )
         self.scale, self.index = tables[0].plant.scale, tables[0].plant.index
+        self.si = self.z * self.scale  # the states in SI units
         self.rows = np.arange(spec.batch)
         self.level: IndexArray = np.zeros(spec.batch, dtype=np.intp)
         self.explicit = np.zeros((spec.batch, INPUTS))
@@ -159,20 +160,9 @@ class Integrator:
                 assert step is not None, f"{type(term).__name__} has modes but no step"
                 self.moded.append((step, int(stride)))
 
-    @property
-    def params(self) -> tuple[ModelParameters, ...]:
-        """The LTI coefficients of every set."""
-        return self.spec.params
-
-    @property
-    def sample_time(self) -> float:
-        """Step (s)."""
-        return self._sample_time
-
     def value(self, name: str) -> FloatArray:
         """One state of the plant by name (SI)."""
-        i = self.index[name]
-        return np.asarray(self.z[:, i] * self.scale[i], dtype=float)
+        return self.si[:, self.index[name]]
 
     def seal(self) -> FloatArray:
         """Seal deflection ``x_p - x_c`` (m)."""
@@ -202,11 +192,12 @@ class Integrator:
             self.level = np.clip(np.searchsorted(self.grid, p_b), 0, self.levels - 1)
         explicit = self.explicit
         explicit[:] = 0.0
-        mode: IndexArray | int = 0
         for step in self.steps:
             step.inputs(self, explicit)
+        mode: IndexArray | int = 0
         for step, stride in self.moded:
-            mode = mode + step.mode() * stride
+            digit = step.mode()
+            mode = mode + (digit if stride == 1 else digit * stride)
         index = (self.rows, block, self.level, mode)
         self.z = (
             np.einsum("bij,bj->bi", self.phi[index], self.z)
@@ -214,6 +205,7 @@ class Integrator:
             + self.g_now[index] * pressure
             + np.einsum("bij,bj->bi", self.g_w[index], explicit)
         )
+        self.si = self.z * self.scale
         for step in self.steps:
             step.update(self)
         return self.outputs()
