@@ -52,17 +52,3 @@ QUANTITY_TOPICS: dict[str, TopicSpec] = {
 
 OUTPUT_CHANNELS = ("p_b", "F_k", "x_c")
 """Channel keys used in metrics and JSON."""
-
-EFFECT_NAMES = (
-    "seal_stick_slip",
-    "seal_groove_asymmetry",
-    "entrained_air",
-    "orifice_flow",
-    "hose_compliance",
-    "bore_friction",
-    "eccentric_load",
-    "thermal_drift",
-    "sensor_delay",
-)
-"""interface.md's effect table in its order, less ``unexplained`` (the virtual rig simulates
-each, the diagnosis has a candidate for each)."""

@@ -26,7 +26,7 @@ from brake_hil.analysis import signals
 from brake_hil.analysis.characterization import characterize
 from brake_hil.analysis.recording import Recording
 from brake_hil.diagnosis.calibration import Calibration, calibrate
-from brake_hil.diagnosis.candidates import BY_NAME, CANDIDATES
+from brake_hil.diagnosis.candidates import CANDIDATES, candidate
 from brake_hil.diagnosis.dataset import Dataset, prepare
 from brake_hil.diagnosis.evidence import Evidence, collect
 from brake_hil.diagnosis.fitting import Fit, Model, fit
@@ -83,7 +83,9 @@ class Diagnosis:
 
     def improved_model(self, rig_path: Path) -> ImprovedModel:
         """The improved model in the form the caliper-model node loads."""
-        model = Model(self.calibration, [BY_NAME[e] for e in self.improved.effects], self.dataset)
+        model = Model(
+            self.calibration, [candidate(e) for e in self.improved.effects], self.dataset
+        )
         parameters = self.improved.parameters()
         prefix = "calibration."
         return ImprovedModel(
@@ -123,9 +125,9 @@ class Diagnosis:
                     "parameters": h.parameters(),
                     "units": dict(zip(h.parameter_names, h.parameter_units)),
                     "signature_seen": all(
-                        BY_NAME[e].consistent(self.evidence.values) for e in h.effects
+                        candidate(e).consistent(self.evidence.values) for e in h.effects
                     ),
-                    "description": " ".join(BY_NAME[e].describe() for e in h.effects),
+                    "description": " ".join(candidate(e).describe() for e in h.effects),
                 }
                 for h in ranked
             ],
@@ -149,9 +151,9 @@ class Diagnosis:
         }
 
 
-def _score(baseline: Fit, candidate: Fit) -> float:
+def _score(baseline: Fit, fitted: Fit) -> float:
     """Log held-out improvement less a charge per parameter."""
-    return math.log(_gain(baseline, candidate)) - PARAMETER_PENALTY * candidate.theta.size
+    return math.log(_gain(baseline, fitted)) - PARAMETER_PENALTY * fitted.theta.size
 
 
 def held_out_metrics(model: Model, theta: np.ndarray) -> dict[str, dict[str, float]]:
@@ -195,9 +197,9 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
     table3 = characterize(recording, rig)
     evidence = collect(baseline_model, baseline.theta, [(s.ptp_pressure, s.k_eh) for s in table3])
     singles: list[Fit] = []
-    for candidate in CANDIDATES:
-        say(f"fitting {candidate.name}")
-        singles.append(fit(Model(calibration, [candidate], dataset)))
+    for single in CANDIDATES:
+        say(f"fitting {single.name}")
+        singles.append(fit(Model(calibration, [single], dataset)))
     pairs = _fit_pairs(calibration, dataset, baseline, singles, say)
     hypotheses = singles + pairs
     summary = summarise(baseline, singles, pairs, dataset.noise_cost(), evidence)
@@ -230,7 +232,7 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         improved = chosen
         explanation = _explain(baseline, chosen, evidence)
     say("scoring baseline and improved models on held-out data")
-    improved_model = Model(calibration, [BY_NAME[e] for e in improved.effects], dataset)
+    improved_model = Model(calibration, [candidate(e) for e in improved.effects], dataset)
     return Diagnosis(
         recording=str(recording.path),
         effects=verdict.effects,
@@ -273,7 +275,7 @@ def _fit_pairs(
         say(f"fitting {' + '.join(names)}")
         other_own = len(other.theta) - len(calibration.sigmas)
         start = np.concatenate([best.theta[:own], other.theta[:other_own], best.theta[own:]])
-        model = Model(calibration, [BY_NAME[n] for n in names], dataset)
+        model = Model(calibration, [candidate(n) for n in names], dataset)
         pairs.append(fit(model, start=start))
     return pairs
 
@@ -351,7 +353,7 @@ def summarise(
             held_out_cost=h.held_out_cost,
             window_costs=h.window_costs,
             plausible=_plausible(h),
-            consistent=all(BY_NAME[e].consistent(evidence.values) for e in h.effects),
+            consistent=all(candidate(e).consistent(evidence.values) for e in h.effects),
             channel_nrmse=dict(h.held_out_nrmse),
         )
 
@@ -466,18 +468,18 @@ def _confidence(margin: float) -> float:
     return _logistic(CONFIDENCE_SLOPE * margin + CONFIDENCE_OFFSET)
 
 
-def _gain(baseline: Fit, candidate: Fit) -> float:
+def _gain(baseline: Fit, fitted: Fit) -> float:
     """Held-out improvement of the mean squared error over the baseline."""
-    return ratio(baseline.held_out_cost, candidate.held_out_cost)
+    return ratio(baseline.held_out_cost, fitted.held_out_cost)
 
 
 def _plausible(fit: Fit) -> bool:
     """Every effect's fitted parameters describe that physics (see Candidate.plausible)."""
     column = 0
     for name in fit.effects:
-        candidate = BY_NAME[name]
-        size = len(candidate.parameters)
-        if not candidate.plausible(fit.theta[column : column + size]):
+        model = candidate(name)
+        size = len(model.parameters)
+        if not model.plausible(fit.theta[column : column + size]):
             return False
         column += size
     return True
@@ -492,10 +494,10 @@ def _explain(baseline: Fit, chosen: Fit, evidence: Evidence) -> str:
         f"{100 * chosen.held_out_nrmse[worst]:.2f} %)."
     ]
     for name in chosen.effects:
-        candidate = BY_NAME[name]
-        seen = candidate.consistent(evidence.values)
+        model = candidate(name)
+        seen = model.consistent(evidence.values)
         parts.append(
-            f"{candidate.describe().split('. ')[0]}. Expected signature: {candidate.signature}"
+            f"{model.describe().split('. ')[0]}. Expected signature: {model.signature}"
             f" ({'seen in the evidence' if seen else 'not clearly seen in the evidence'})."
         )
     return " ".join(parts)

@@ -129,7 +129,7 @@ class Model:
         for candidate, size in zip(self.candidates, self.sizes):
             candidate.fill(draft, theta[:, column : column + size], self.context)
             column += size
-        return ModelSpec(tuple(draft.params), **draft.fields)  # type: ignore[arg-type]
+        return draft.spec()
 
     def simulate(
         self, window: Window, theta: FloatArray, span: float | None = None

@@ -17,11 +17,9 @@ from pathlib import Path
 import numpy as np
 
 from brake_hil.diagnosis.calibration import apply_multipliers
-from brake_hil.diagnosis.candidates import BY_NAME
+from brake_hil.diagnosis.candidates import CANDIDATES, candidate
 from brake_hil.diagnosis.candidates.base import Draft, rig_context
-from brake_hil.diagnosis.engine import (
-    ModelSpec,
-)
+from brake_hil.diagnosis.engine import ModelSpec
 from brake_hil.errors import ImprovedModelError
 from brake_hil.physics.rig import Rig
 
@@ -66,10 +64,10 @@ class ImprovedModel:
         context = rig_context(rig, self.flow_amplitude, self.time_reference)
         draft = Draft([apply_multipliers(rig, mean_pressure, self.multipliers)])
         for name in self.effects:
-            candidate = BY_NAME[name]
-            theta = np.array([[self.parameters[p.name] for p in candidate.parameters]])
-            candidate.fill(draft, theta, context)
-        return ModelSpec(tuple(draft.params), **draft.fields)  # type: ignore[arg-type]
+            model = candidate(name)
+            theta = np.array([[self.parameters[p.name] for p in model.parameters]])
+            model.fill(draft, theta, context)
+        return draft.spec()
 
 
 def read_improved_model(path: Path) -> ImprovedModel:
@@ -84,12 +82,13 @@ def read_improved_model(path: Path) -> ImprovedModel:
         raise ImprovedModelError(f"{path}: not an improved model (format {FORMAT} expected)")
     try:
         effects = tuple(document["effects"])
-        unknown = [e for e in effects if e not in BY_NAME]
+        known = {c.name for c in CANDIDATES}
+        unknown = [e for e in effects if e not in known]
         if unknown:
             raise ImprovedModelError(f"{path}: unknown effect '{unknown[0]}'")
         parameters = {str(k): float(v) for k, v in document["parameters"].items()}
         for name in effects:
-            for parameter in BY_NAME[name].parameters:
+            for parameter in candidate(name).parameters:
                 if parameter.name not in parameters:
                     raise ImprovedModelError(
                         f"{path}: missing parameter '{parameter.name}' of {name}"

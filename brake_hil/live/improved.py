@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from brake_hil.diagnosis.engine import Integrator, ModelSpec, simulate_batch
+from brake_hil.diagnosis.engine import ChannelDelay, Integrator, ModelSpec, simulate_batch
 from brake_hil.diagnosis.improved_model import LIVE_SAMPLE_TIME, read_improved_model
 from brake_hil.live.model import LiveModel
 from brake_hil.physics.lti_model import ModelOutput
@@ -31,9 +31,8 @@ class CandidateStepper:
         self._sample_time = sample_time
         self._integrator: Integrator | None = None
         self._previous = 0.0
-        delays = (
-            np.zeros(3) if spec.output_delay is None else np.maximum(spec.output_delay[0], 0.0)
-        )
+        delay = spec.term(ChannelDelay)
+        delays = np.zeros(3) if delay is None else np.maximum(delay.delays[0], 0.0)
         self._delay_samples = delays / sample_time
         self._history: deque[FloatArray] = deque(
             maxlen=int(np.ceil(self._delay_samples.max())) + 2

@@ -19,7 +19,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from brake_hil.analysis import signals  # noqa: E402
-from brake_hil.diagnosis.candidates import BY_NAME  # noqa: E402
+from brake_hil.diagnosis.candidates import CANDIDATES  # noqa: E402
 from brake_hil.diagnosis.diagnose import Diagnosis  # noqa: E402
 from brake_hil.diagnosis.evidence import PHASE_BINS  # noqa: E402
 from brake_hil.diagnosis.fitting import Model  # noqa: E402
@@ -49,7 +49,8 @@ def _held_out_signals(diagnosis: Diagnosis) -> dict[str, dict[str, np.ndarray]]:
     cal = diagnosis.calibration
     result: dict[str, dict[str, np.ndarray]] = {}
     for label, fitted in (("baseline", diagnosis.baseline), ("improved", diagnosis.improved)):
-        model = Model(cal, [BY_NAME[e] for e in fitted.effects if e in BY_NAME], ds)
+        known = {c.name: c for c in CANDIDATES}
+        model = Model(cal, [known[e] for e in fitted.effects if e in known], ds)
         outputs, index = model.simulate(window, fitted.theta[None, :])
         result[label] = {key: outputs[0, c] for c, key in enumerate(OUTPUT_CHANNELS)}
         result["time"] = {"t": ds.time[index]}

@@ -13,6 +13,7 @@ import pytest
 
 from brake_hil.analysis.comparison import predict
 from brake_hil.io.recording_writer import write_recording
+from brake_hil.physics.catalogue import effect_names
 from brake_hil.physics.excitation import pulsing_profile
 from brake_hil.physics.parameters import derive_parameters
 from brake_hil.physics.rig import Rig
@@ -20,7 +21,6 @@ from brake_hil.topics import (
     BLOCK_FORCE,
     BORE_PRESSURE,
     CALIPER_DISPLACEMENT,
-    EFFECT_NAMES,
     MASTER_CYLINDER_PRESSURE,
 )
 from test.conftest import CONFIG, PEER_DATA
@@ -258,7 +258,7 @@ def test_diagnose_on_a_parameter_error_only_finds_no_missing_physics(tmp_path: P
     diagnosis = json.loads((tmp_path / "d" / "diagnosis.json").read_text())
     assert diagnosis["verdict"]["effects"] == []
     assert set(diagnosis["baseline"]["metrics"]) == {"p_b", "F_k", "x_c"}
-    assert {h["effect"] for h in diagnosis["hypotheses"]} >= set(EFFECT_NAMES)
+    assert {h["effect"] for h in diagnosis["hypotheses"]} >= set(effect_names())
     assert diagnosis["decision_inputs"]["noise_cost"] > 0
     multipliers = diagnosis["calibration"]["multipliers"]
     assert multipliers["caliper_stiffness"] == pytest.approx(3.4e7 / 4.0e7, rel=0.03)

@@ -11,8 +11,7 @@ import numpy as np
 import pytest
 
 from brake_hil.physics import catalogue
-from brake_hil.physics.catalogue import EffectEntry, Quantity
-from brake_hil.topics import EFFECT_NAMES
+from brake_hil.physics.catalogue import EffectEntry, Quantity, effect_names
 from brake_hil.virtual_rig import (
     EFFECTS,
     EffectError,
@@ -32,7 +31,7 @@ from brake_hil.virtual_rig.effects import (
 from brake_hil.virtual_rig.laws import LtiPlant, Signal, TruthLaw
 from test.virtual_rig.conftest import RunFactory
 
-INTERFACE_EFFECTS = EFFECT_NAMES  # interface.md's effect table, less "unexplained"
+INTERFACE_EFFECTS = effect_names()  # interface.md's effect table, less "unexplained"
 ALL_EFFECTS = {**EFFECTS, **OUT_OF_LIBRARY}
 EVERY_EFFECT = (*INTERFACE_EFFECTS, *OUT_OF_LIBRARY)  # the out-of-library ones keep it too
 SHORT = {"max_pressures": (1.38e6,), "pulsing_s": 0.6}

@@ -1,10 +1,13 @@
 """The one small interface every candidate model of the diagnosis shares.
 
 A candidate is the calibrated LTI model augmented with one piece of left-out physics. It
-declares its parameters (unit, bounds, start value, linear or logarithmic search), describes
-the physics and its source, states the signature it should leave in the data, and fills a
-:class:`Draft` of the simulator's :class:`~brake_hil.diagnosis.engine.ModelSpec` for a
-batch of parameter vectors. Two candidates combine by filling the same draft in turn.
+points to its entry of the effect catalogue (:mod:`brake_hil.physics.catalogue`: name,
+physics, source, signature), declares its parameters (unit, bounds, start value, linear or
+logarithmic search), describes its model of the physics, and fills a :class:`Draft` of the
+engine's :class:`~brake_hil.diagnosis.engine.ModelSpec` for a batch of parameter vectors:
+it scales LTI coefficients and adds terms through the engine's protocol
+(:class:`~brake_hil.diagnosis.engine.Term`). Two candidates combine by filling the same draft
+in turn.
 
 The candidates are deliberately simpler than the virtual rig's physics (an ideal Jenkins
 slider, not a rate-dependent bristle law; one lumped hose stage, not a ladder; isothermal,
@@ -19,6 +22,8 @@ from typing import ClassVar, NamedTuple
 
 import numpy as np
 
+from brake_hil.diagnosis.engine import ModelSpec, Term
+from brake_hil.physics.catalogue import EffectEntry
 from brake_hil.physics.parameters import (
     ModelParameters,
     SealProperties,
@@ -79,7 +84,7 @@ class Draft:
     """A ModelSpec under construction for a batch of parameter vectors."""
 
     params: list[ModelParameters]
-    fields: dict[str, FloatArray] = field(default_factory=dict)
+    terms: list[Term] = field(default_factory=list)
 
     @property
     def batch(self) -> int:
@@ -93,17 +98,34 @@ class Draft:
             for p, f in zip(self.params, factors)
         ]
 
-    def add(self, name: str, values: FloatArray) -> None:
-        """Set (or add to) a ModelSpec field."""
-        self.fields[name] = self.fields.get(name, 0.0) + np.asarray(values, dtype=float)
+    def add(self, term: Term) -> None:
+        """Add a term; one of its kind already there absorbs it (:meth:`Term.merge`)."""
+        for k, present in enumerate(self.terms):
+            if type(present) is type(term):
+                self.terms[k] = present.merge(term)
+                return
+        self.terms.append(term)
+
+    def spec(self) -> ModelSpec:
+        """The finished ModelSpec."""
+        return ModelSpec(tuple(self.params), tuple(self.terms))
 
 
 class Candidate:
     """Base of the candidate models (see the modules beside this one)."""
 
-    name: ClassVar[str]
+    entry: ClassVar[EffectEntry]  # what the effect is (name, physics, source, signature)
     parameters: ClassVar[tuple[CandidateParameter, ...]]
-    signature: ClassVar[str]  # how it shows in a recording
+
+    @property
+    def name(self) -> str:
+        """The effect's name (its catalogue entry's)."""
+        return self.entry.name
+
+    @property
+    def signature(self) -> str:
+        """How the effect shows in a recording (its catalogue entry's)."""
+        return self.entry.signature
 
     def fill(self, draft: Draft, theta: FloatArray, context: Context) -> None:
         """Add this physics to ``draft`` for parameter rows ``theta`` (B, P)."""

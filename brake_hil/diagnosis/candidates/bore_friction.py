@@ -10,6 +10,8 @@ from brake_hil.diagnosis.candidates.base import (
     Context,
     Draft,
 )
+from brake_hil.diagnosis.engine import FrictionElement
+from brake_hil.physics.catalogue import CATALOGUE
 from brake_hil.types import FloatArray
 
 CONTACT_STIFFNESS = 5.0e7
@@ -25,21 +27,22 @@ class BoreFriction(Candidate):
     series with a slider whose threshold follows that force, in parallel with the seal.
     """
 
-    name = "bore_friction"
+    entry = CATALOGUE["bore_friction"]
     parameters = (CandidateParameter("bore_friction_coefficient", "-", 0.0, 3.0, 0.2),)
-    signature = (
-        "extra damping that grows with p_b |x_c|: the high-pressure segments lose more "
-        "amplitude in x_c and F_k than the low"
-    )
 
     def fill(self, draft: Draft, theta: FloatArray, context: Context) -> None:
-        """A slider whose threshold is mu 4 A_eb p_b |x_c| / l_c."""
+        """A slider whose threshold is mu 4 A_eb p_b |x_c| / l_c (on the seal's slider, if
+        there is one)."""
         bore_area = np.array([p.bore_area for p in draft.params])
-        if "jenkins_spring" not in draft.fields:
-            draft.fields["jenkins_spring"] = np.full(draft.batch, CONTACT_STIFFNESS)
-            draft.add("apply_threshold", np.zeros(draft.batch))
-            draft.add("release_threshold", np.zeros(draft.batch))
-        draft.add("bore_friction", 4.0 * theta[:, 0] * bore_area / context.transducer_distance)
+        draft.add(
+            FrictionElement(
+                spring=np.full(draft.batch, CONTACT_STIFFNESS),
+                apply_threshold=np.zeros(draft.batch),
+                release_threshold=np.zeros(draft.batch),
+                bore_friction=4.0 * theta[:, 0] * bore_area / context.transducer_distance,
+                contact=True,
+            )
+        )
 
     def consistent(self, evidence: dict[str, float]) -> bool:
         """The caliper or block channel is mispredicted."""

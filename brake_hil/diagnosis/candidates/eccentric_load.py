@@ -2,13 +2,45 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
+import numpy as np
+
 from brake_hil.diagnosis.candidates.base import (
     Candidate,
     CandidateParameter,
     Context,
     Draft,
 )
+from brake_hil.diagnosis.engine import CALIPER_FORCE, State, Step, Term
+from brake_hil.physics.catalogue import CATALOGUE
 from brake_hil.types import FloatArray
+
+REFERENCE_PRESSURE = 1.0e6
+"""Pressure (Pa) about which the load-dependent share is written."""
+
+
+@dataclass(frozen=True, eq=False)
+class LoadShareSlope(Term):
+    """A caliper force ``-s_1 A_eb p_b (p_b - p_ref) / p_ref`` held over each step."""
+
+    slope: FloatArray  # -, s_1
+
+    def start(self, state: State) -> Step:
+        """The force with each set's ``A_eb``."""
+        return _LoadShare(self.slope, np.array([p.bore_area for p in state.params]))
+
+
+class _LoadShare(Step):
+    def __init__(self, slope: FloatArray, bore_area: FloatArray) -> None:
+        self.slope, self.bore_area = slope, bore_area
+
+    def inputs(self, state: State, explicit: FloatArray) -> None:
+        """The load-dependent part of the caliper's force."""
+        p_b = state.value("p_b")
+        explicit[:, CALIPER_FORCE] += (
+            -self.bore_area * self.slope * p_b * (p_b - REFERENCE_PRESSURE) / REFERENCE_PRESSURE
+        )
 
 
 class EccentricLoad(Candidate):
@@ -21,17 +53,16 @@ class EccentricLoad(Candidate):
     ``p_ref`` = 1 MPa. It scales x_c and leaves p_b nearly alone.
     """
 
-    name = "eccentric_load"
+    entry = CATALOGUE["eccentric_load"]
     parameters = (
         CandidateParameter("share_offset", "-", -0.6, 0.6, 0.0),
         CandidateParameter("share_slope", "-", -0.4, 0.4, 0.0),
     )
-    signature = "x_c's amplitude is mispredicted while p_b is right; the error grows with load"
 
     def fill(self, draft: Draft, theta: FloatArray, context: Context) -> None:
         """Scale A_eb in the caliper's equation and add the load-dependent part."""
         draft.scale("bore_area", 1.0 + theta[:, 0])
-        draft.add("share_slope", theta[:, 1])
+        draft.add(LoadShareSlope(theta[:, 1].copy()))
 
     def consistent(self, evidence: dict[str, float]) -> bool:
         """x_c is off by more than p_b."""

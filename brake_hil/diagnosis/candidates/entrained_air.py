@@ -2,13 +2,34 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 from brake_hil.diagnosis.candidates.base import (
     Candidate,
     CandidateParameter,
     Context,
     Draft,
 )
+from brake_hil.diagnosis.engine import Coupling, Entry, Term
+from brake_hil.physics.catalogue import CATALOGUE
 from brake_hil.types import FloatArray
+
+ATMOSPHERE = 1.013e5
+"""Absolute pressure of gauge zero (Pa)."""
+
+
+@dataclass(frozen=True, eq=False)
+class IsothermalAir(Term):
+    """Air in the bore chamber: compliance ``V_0 p_atm / p_abs^2`` on top of ``C_b``."""
+
+    volume: FloatArray  # m^3, air volume at gauge zero
+
+    pressure_scheduled = True
+
+    def couple(self, coupling: Coupling, row: int, entry: Entry) -> None:
+        """The air's compliance at the entry's bore pressure."""
+        absolute = max(entry.pressure, 0.0) + ATMOSPHERE
+        coupling.extra_compliance += float(self.volume[row]) * ATMOSPHERE / absolute**2
 
 
 class EntrainedAir(Candidate):
@@ -21,16 +42,12 @@ class EntrainedAir(Candidate):
     zero beyond what the calibrated compliance holds.
     """
 
-    name = "entrained_air"
+    entry = CATALOGUE["entrained_air"]
     parameters = (CandidateParameter("air_share", "-", 1.0e-4, 0.2, 5.0e-3, logarithmic=True),)
-    signature = (
-        "p_b lags and drops more at low pressure than at high; the mismatch in p_b changes "
-        "with the segment's mean pressure; super-harmonics in p_b"
-    )
 
     def fill(self, draft: Draft, theta: FloatArray, context: Context) -> None:
         """Pressure-scheduled bore compliance."""
-        draft.add("air_volume", theta[:, 0] * context.bore_volume)
+        draft.add(IsothermalAir(theta[:, 0] * context.bore_volume))
 
     def consistent(self, evidence: dict[str, float]) -> bool:
         """The bore pressure is mispredicted."""

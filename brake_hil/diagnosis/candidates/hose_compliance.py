@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from brake_hil.diagnosis.candidates.base import (
@@ -10,7 +12,24 @@ from brake_hil.diagnosis.candidates.base import (
     Context,
     Draft,
 )
+from brake_hil.diagnosis.engine import Coupling, Entry, Term
+from brake_hil.physics.catalogue import CATALOGUE
 from brake_hil.types import FloatArray
+
+
+@dataclass(frozen=True, eq=False)
+class HoseNode(Term):
+    """A node of compliance ``C_h`` between the pipe and valve and the hose."""
+
+    compliance: FloatArray  # m^3/Pa, C_h
+    resistance_share: FloatArray  # -, part of the line resistance beyond the node
+
+    linear = True
+
+    def couple(self, coupling: Coupling, row: int, entry: Entry) -> None:
+        """Split the line at the node."""
+        coupling.hose_compliance = float(self.compliance[row])
+        coupling.hose_resistance_share = float(self.resistance_share[row])
 
 
 class HoseCompliance(Candidate):
@@ -24,18 +43,16 @@ class HoseCompliance(Candidate):
     resistance ``R_t`` and the rest) (Merritt 1967, ch. 4, lumped transmission line).
     """
 
-    name = "hose_compliance"
+    entry = CATALOGUE["hose_compliance"]
     parameters = (
         CandidateParameter("hose_compliance_ratio", "-", 0.02, 20.0, 0.5, logarithmic=True),
     )
-    signature = "p_b lags p_i more than the model predicts; its amplitude drops; x_c follows"
 
     def fill(self, draft: Draft, theta: FloatArray, context: Context) -> None:
         """A hose node whose compliance is a multiple of the bore's."""
         compliance = np.array([p.bore_compliance for p in draft.params])
-        draft.add("hose_compliance", theta[:, 0] * compliance)
         share = np.full(len(draft.params), context.hose_resistance_share)
-        draft.add("hose_resistance_share", share)
+        draft.add(HoseNode(theta[:, 0] * compliance, share))
 
     def consistent(self, evidence: dict[str, float]) -> bool:
         """The bore pressure is mispredicted."""

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from brake_hil.diagnosis.candidates.base import (
@@ -10,7 +12,25 @@ from brake_hil.diagnosis.candidates.base import (
     Context,
     Draft,
 )
+from brake_hil.diagnosis.engine import LINE_DROP, State, Step, Term
+from brake_hil.physics.catalogue import CATALOGUE
 from brake_hil.types import FloatArray
+
+
+@dataclass(frozen=True, eq=False)
+class QuadraticDrop(Term, Step):
+    """A line pressure drop ``K Q |Q|`` at the valve, held over each step (its own step)."""
+
+    coefficient: FloatArray  # Pa s^2/m^6, K
+
+    def start(self, state: State) -> Step:
+        """Stateless: the term is its own step."""
+        return self
+
+    def inputs(self, state: State, explicit: FloatArray) -> None:
+        """The drop at the flow through the valve."""
+        q = state.line_flow()
+        explicit[:, LINE_DROP] += self.coefficient * q * np.abs(q)
 
 
 class OrificeFlow(Candidate):
@@ -23,19 +43,15 @@ class OrificeFlow(Candidate):
     so the drop is unchanged at ``Q_0`` and grows faster above it.
     """
 
-    name = "orifice_flow"
+    entry = CATALOGUE["orifice_flow"]
     parameters = (CandidateParameter("turbulent_share", "-", 0.0, 0.95, 0.3),)
-    signature = (
-        "p_b's peak-to-peak is overpredicted more at large amplitudes than at small; p_b is "
-        "flattened near its turning points"
-    )
 
     def fill(self, draft: Draft, theta: FloatArray, context: Context) -> None:
         """Move a share of the line resistance into a quadratic drop."""
         share = theta[:, 0]
         resistance = np.array([p.line_resistance for p in draft.params])
         draft.scale("line_resistance", 1.0 - share)
-        draft.add("orifice_coefficient", share * resistance / context.flow_amplitude)
+        draft.add(QuadraticDrop(share * resistance / context.flow_amplitude))
 
     def consistent(self, evidence: dict[str, float]) -> bool:
         """The bore pressure is mispredicted."""

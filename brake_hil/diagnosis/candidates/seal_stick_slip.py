@@ -10,6 +10,8 @@ from brake_hil.diagnosis.candidates.base import (
     Context,
     Draft,
 )
+from brake_hil.diagnosis.engine import FrictionElement
+from brake_hil.physics.catalogue import CATALOGUE
 from brake_hil.types import FloatArray
 
 
@@ -25,15 +27,11 @@ class SealStickSlip(Candidate):
     seal that slips over only part of its contact, or one whose rubber shears viscously).
     """
 
-    name = "seal_stick_slip"
+    entry = CATALOGUE["seal_stick_slip"]
     parameters = (
         CandidateParameter("seal_spring", "N/m", 2.0e6, 2.0e8, 2.3e7, logarithmic=True),
         CandidateParameter("slip_force", "N", 10.0, 3.0e3, 310.0, logarithmic=True),
         CandidateParameter("friction_share", "-", 0.05, 1.0, 0.7),
-    )
-    signature = (
-        "k_eh falls as the pressure amplitude grows; super-harmonics grow from p_i to x_c; "
-        "the loop of seal force against seal displacement is a parallelogram"
     )
 
     def start(self, context: Context) -> FloatArray:
@@ -47,9 +45,13 @@ class SealStickSlip(Candidate):
         share = theta[:, 2]
         draft.scale("effective_hydraulic_stiffness", 1.0 - share)
         draft.scale("effective_hydraulic_damping", 1.0 - share)
-        draft.fields["jenkins_spring"] = theta[:, 0] * share
-        draft.add("apply_threshold", theta[:, 1] * share)
-        draft.add("release_threshold", theta[:, 1] * share)
+        draft.add(
+            FrictionElement(
+                spring=theta[:, 0] * share,
+                apply_threshold=theta[:, 1] * share,
+                release_threshold=theta[:, 1] * share,
+            )
+        )
 
     def consistent(self, evidence: dict[str, float]) -> bool:
         """Harmonics grow toward x_c, or k_eh falls with amplitude."""

@@ -10,6 +10,8 @@ from brake_hil.diagnosis.candidates.base import (
     Context,
     Draft,
 )
+from brake_hil.diagnosis.engine import ChannelDelay
+from brake_hil.physics.catalogue import CATALOGUE
 from brake_hil.types import FloatArray
 
 SKEW_THRESHOLD = 0.5e-3
@@ -25,16 +27,15 @@ class SensorDelay(Candidate):
     is acquired late).
     """
 
-    name = "sensor_delay"
+    entry = CATALOGUE["sensor_delay"]
     parameters = tuple(
         CandidateParameter(f"delay_{channel}", "s", -0.02, 0.02, 0.0)
         for channel in ("p_b", "F_k", "x_c")
     )
-    signature = "one channel's time offset tau differs from the others'; amplitudes agree"
 
     def fill(self, draft: Draft, theta: FloatArray, context: Context) -> None:
         """Delay each output channel."""
-        draft.fields["output_delay"] = theta[:, :3].copy()
+        draft.add(ChannelDelay(theta[:, :3].copy()))
 
     def plausible(self, theta: FloatArray) -> bool:
         """Skew: one output lags the others by over half a millisecond, or every output

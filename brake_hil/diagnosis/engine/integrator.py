@@ -1,0 +1,247 @@
+"""The candidate models run over a recording (:func:`simulate_batch`) or sample by sample
+(:class:`Integrator`), for a batch of parameter sets at once."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import itertools
+
+import numpy as np
+
+from brake_hil.diagnosis.engine.plant import (
+    INPUTS,
+    Coupling,
+    Discrete,
+    Plant,
+    build_plant,
+    discretize,
+)
+from brake_hil.diagnosis.engine.terms import Entry, ModelSpec, Step
+from brake_hil.physics.lti_model import DiscreteModel, simulate
+from brake_hil.types import FloatArray, IndexArray
+
+__all__ = ["Integrator", "simulate_batch"]
+
+Modes = tuple[int, ...]
+"""One mode of every term of a spec, in the spec's order."""
+
+
+def _plant(spec: ModelSpec, row: int, pressure: float, time: float, modes: Modes) -> Plant:
+    """The linear plant of set ``row`` at one schedule entry."""
+    coupling = Coupling()
+    for term, mode in zip(spec.terms, modes):
+        term.couple(coupling, row, Entry(pressure, time, mode))
+    return build_plant(spec.params[row], coupling)
+
+
+@dataclass(frozen=True)
+class _Tables:
+    phi: FloatArray  # (T, L, M, n, n)
+    g_prev: FloatArray  # (T, L, M, n)
+    g_now: FloatArray  # (T, L, M, n)
+    g_w: FloatArray  # (T, L, M, n, INPUTS)
+    plant: Plant  # the plant at the start (block 0, gauge zero, every term in mode 0)
+
+
+def _tables(
+    spec: ModelSpec,
+    row: int,
+    pressures: FloatArray,
+    blocks: int,
+    block_s: float,
+    h: float,
+    modes: list[Modes],
+) -> _Tables:
+    """Transition matrices of set ``row`` over time blocks, pressure levels and modes."""
+    entries: list[list[list[Discrete]]] = []
+    start: Plant | None = None
+    for block in range(blocks):
+        time = (block + 0.5) * block_s
+        levels = []
+        for pressure in pressures:
+            by_mode = []
+            for mode in modes:
+                plant = _plant(spec, row, float(pressure), time, mode)
+                start = start or plant
+                by_mode.append(discretize(plant, h))
+            levels.append(by_mode)
+        entries.append(levels)
+    assert start is not None
+    stacked = [
+        np.array([[[m[j] for m in lvl] for lvl in levels] for levels in entries]) for j in range(4)
+    ]
+    return _Tables(stacked[0], stacked[1], stacked[2], stacked[3], start)
+
+
+def _simulate_linear(spec: ModelSpec, u: FloatArray, sample_time: float) -> FloatArray:
+    """Linear candidates through the vectorised modal simulation of the LTI model."""
+    out = np.empty((spec.batch, 3, u.size))
+    modes = (0,) * len(spec.terms)
+    for b in range(spec.batch):
+        plant = _plant(spec, b, 0.0, 0.0, modes)
+        phi, g_prev, g_now, _ = discretize(plant, sample_time)
+        model = DiscreteModel(
+            transition=phi,
+            input_previous=g_prev,
+            input_current=g_now,
+            output_matrix=plant.C,
+            equilibrium_gain=np.asarray(-np.linalg.solve(plant.A, plant.B), dtype=float),
+            sample_time=sample_time,
+            output_names=("p_b", "F_k", "x_c"),
+        )
+        out[b] = simulate(model, u)
+    return _transform(spec, out, sample_time)
+
+
+def _transform(spec: ModelSpec, out: FloatArray, sample_time: float) -> FloatArray:
+    """The terms' output transforms, in order."""
+    for term in spec.terms:
+        out = term.transform(out, sample_time)
+    return out
+
+
+class Integrator:
+    """The candidate models' state, advanced one sample at a time for a batch of sets.
+
+    :func:`simulate_batch` runs it over a recording;
+    :class:`~brake_hil.live.improved.CandidateStepper` runs one set live, sample by sample;
+    both give the same numbers for the same inputs. It is the :class:`~.terms.State` the
+    terms' steps see.
+    """
+
+    def __init__(
+        self,
+        spec: ModelSpec,
+        first_pressure: float,
+        sample_time: float,
+        pressure_ceiling: float,
+        duration: float,
+        pressure_levels: int = 16,
+        block_s: float = 1.0,
+        start_time: float = 0.0,
+    ) -> None:
+        terms = spec.terms
+        self.spec, self.params = spec, spec.params
+        self.sample_time, self.block_s = sample_time, block_s
+        self.start_time, self.levels = start_time, pressure_levels
+        self.on_pressure = any(t.pressure_scheduled for t in terms)
+        self.on_time = any(t.time_scheduled for t in terms)
+        self.grid = (
+            np.linspace(0.0, max(pressure_ceiling, 1e5), pressure_levels)
+            if self.on_pressure
+            else np.zeros(1)
+        )
+        self.blocks = int(np.ceil((start_time + duration) / block_s)) + 1 if self.on_time else 1
+        modes = list(itertools.product(*(range(t.modes) for t in terms)))
+        tables = [
+            _tables(spec, b, self.grid, self.blocks, block_s, sample_time, modes)
+            for b in range(spec.batch)
+        ]
+        self.phi = np.stack([t.phi for t in tables])
+        self.g_prev = np.stack([t.g_prev for t in tables])
+        self.g_now = np.stack([t.g_now for t in tables])
+        self.g_w = np.stack([t.g_w for t in tables])
+        self.out_c = np.stack([t.plant.C for t in tables])
+        self.z = np.stack(
+            [-np.linalg.solve(t.plant.A, t.plant.B * first_pressure) for t in tables]
+        )
+        self.scale, self.index = tables[0].plant.scale, tables[0].plant.index
+        self.si = self.z * self.scale  # the states in SI units
+        self.rows = np.arange(spec.batch)
+        self.level: IndexArray = np.zeros(spec.batch, dtype=np.intp)
+        self.explicit = np.zeros((spec.batch, INPUTS))
+        self.step_index = 0
+        started = [(term, term.start(self)) for term in terms]
+        self.steps: list[Step] = [step for _, step in started if step is not None]
+        strides = np.cumprod([1, *(t.modes for t in reversed(terms))])[::-1][1:]
+        self.moded: list[tuple[Step, int]] = []
+        for (term, step), stride in zip(started, strides):
+            if term.modes > 1:
+                assert step is not None, f"{type(term).__name__} has modes but no step"
+                self.moded.append((step, int(stride)))
+
+    def value(self, name: str) -> FloatArray:
+        """One state of the plant by name (SI)."""
+        return self.si[:, self.index[name]]
+
+    def seal(self) -> FloatArray:
+        """Seal deflection ``x_p - x_c`` (m)."""
+        return self.value("x_p") - self.value("x_c")
+
+    def seal_velocity(self) -> FloatArray:
+        """``v_p - v_c`` (m/s)."""
+        return self.value("v_p") - self.value("v_c")
+
+    def line_flow(self) -> FloatArray:
+        """Flow through the valve (m^3/s): ``Q_p`` with a hose node, else ``Q_h``."""
+        return self.value("Q_p" if "Q_p" in self.index else "Q_h")
+
+    def outputs(self) -> FloatArray:
+        """Current outputs (B, 3): p_b (Pa), F_k (N), x_c (m)."""
+        return np.asarray(np.einsum("bij,bj->bi", self.out_c, self.z), dtype=float)
+
+    def advance(self, previous_pressure: float, pressure: float) -> FloatArray:
+        """Advance one sample (inputs in Pa, linear between them); return the outputs."""
+        self.step_index += 1
+        block = 0
+        if self.on_time:
+            now = self.start_time + self.step_index * self.sample_time
+            block = min(int(now / self.block_s), self.blocks - 1)
+        if self.on_pressure:
+            p_b = self.value("p_b")
+            self.level = np.clip(np.searchsorted(self.grid, p_b), 0, self.levels - 1)
+        explicit = self.explicit
+        explicit[:] = 0.0
+        for step in self.steps:
+            step.inputs(self, explicit)
+        mode: IndexArray | int = 0
+        for step, stride in self.moded:
+            digit = step.mode()
+            mode = mode + (digit if stride == 1 else digit * stride)
+        index = (self.rows, block, self.level, mode)
+        self.z = (
+            np.einsum("bij,bj->bi", self.phi[index], self.z)
+            + self.g_prev[index] * previous_pressure
+            + self.g_now[index] * pressure
+            + np.einsum("bij,bj->bi", self.g_w[index], explicit)
+        )
+        self.si = self.z * self.scale
+        for step in self.steps:
+            step.update(self)
+        return self.outputs()
+
+
+def simulate_batch(
+    spec: ModelSpec,
+    pressure: FloatArray,
+    sample_time: float,
+    pressure_levels: int = 16,
+    block_s: float = 1.0,
+    start_time: float = 0.0,
+    pressure_ceiling: float | None = None,
+) -> FloatArray:
+    """Outputs ``(B, 3, N)`` (p_b Pa, F_k N, x_c m) of every parameter set of ``spec``
+    driven by ``pressure`` (Pa, one sample per ``sample_time`` s), from the equilibrium at
+    the first sample with every slider relaxed. ``start_time`` (s) is the first sample's time
+    in the recording (time-scheduled terms run on recording time); the pressure schedule
+    spans 0 to ``pressure_ceiling`` (Pa; default 1.2 times the input's maximum).
+    """
+    u = np.asarray(pressure, dtype=float)
+    if spec.is_linear:
+        return _simulate_linear(spec, u, sample_time)
+    ceiling = 1.2 * float(u.max()) if pressure_ceiling is None else pressure_ceiling
+    integrator = Integrator(
+        spec,
+        float(u[0]),
+        sample_time,
+        ceiling,
+        u.size * sample_time,
+        pressure_levels,
+        block_s,
+        start_time,
+    )
+    out = np.empty((spec.batch, 3, u.size))
+    out[:, :, 0] = integrator.outputs()
+    for k in range(1, u.size):
+        out[:, :, k] = integrator.advance(u[k - 1], u[k])
+    return _transform(spec, out, sample_time)
