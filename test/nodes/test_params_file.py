@@ -27,7 +27,7 @@ from test.nodes.harness import Collector, ros_domain, unique_domain_id
 
 def call(node: Node, service_type: Any, name: str, request: Any, timeout_s: float = 20.0) -> Any:
     """One service call from ``node`` (spun by its Collector's executor)."""
-    client = node.create_client(service_type, name)
+    client: Any = node.create_client(service_type, name)
     assert client.wait_for_service(timeout_sec=timeout_s), f"no service {name}"
     future = client.call_async(request)
     deadline = time.monotonic() + timeout_s
@@ -119,7 +119,10 @@ def test_package_file_defaults_name_the_package_config_and_overrides_win() -> No
         assert settings.model_file == str(common.config_path("rig_default.yaml"))
         assert Path(settings.model_file).is_absolute()
         assert settings == CaliperModelSettings(model_file=settings.model_file)
-        overrides = [Parameter("mean_pressure", value=1.2e6), Parameter("hold_mode", value="hold")]
+        overrides: list[Parameter[Any]] = [
+            Parameter("mean_pressure", value=1.2e6),
+            Parameter("hold_mode", value="hold"),
+        ]
         node = Node("caliper_model", context=context, parameter_overrides=overrides)
         settings = common.declare_settings(node, CaliperModelSettings)
         assert (settings.mean_pressure, settings.hold_mode) == (1.2e6, "hold")

@@ -57,4 +57,4 @@ def test_scaled_and_resampled_schedules_keep_the_rest() -> None:
         [4.0 * s.mean for s in schedule.segments]
     )
     assert schedule.levels_mpa == "1.00, 2.00"
-    assert PulsingSchedule([1.0e6]).max_pressures == (1.0e6,)  # any sequence, kept as a tuple
+    assert PulsingSchedule((1_000_000,)).max_pressures == (1.0e6,)  # floats
