@@ -37,6 +37,7 @@ import yaml
 from brake_hil.errors import BrakeHilError
 from brake_hil.io.recording_reader import list_topics, read_recording
 from brake_hil.live.model_file import load_model
+from brake_hil.physics.excitation import PulsingSchedule
 from brake_hil.runtime import set_realtime_priority
 from brake_hil.topics import (
     MASTER_CYLINDER_PRESSURE,
@@ -383,8 +384,8 @@ def run_can_chain(
     link = out_dir / "rig_can"
     out_dir.mkdir(parents=True, exist_ok=True)
     link.unlink(missing_ok=True)
-    max_pressure = 1.38e6
-    mean_pressure = max_pressure * (1.0 - 0.22)  # the emulator's pulsing mean (excitation.py)
+    schedule = PulsingSchedule((1.38e6,), pulsing_s=pulsing_s)  # what the emulator plays
+    mean_pressure = schedule.segments[0].mean
     nodes: list[NodeProcess] = []
     stops = _Stops()
     wall_s = 0.0
@@ -417,8 +418,8 @@ def run_can_chain(
             {
                 "rig_file": str(rig_file),
                 "effects": list(effects) or [""],
-                "max_pressures": [max_pressure],
-                "pulsing_s": pulsing_s,
+                "max_pressures": list(schedule.max_pressures),
+                "pulsing_s": schedule.pulsing_s,
                 "loop": False,
                 "output": "can",
                 "can_link_path": str(link),

@@ -19,29 +19,13 @@ The model steps on the raw ``p_i`` it receives. (``brake-hil compare`` filters `
 the seed's 30 Hz zero-phase low-pass first; that filter is not causal, so it cannot run live.
 The comparator filters predictions and measurements alike before scoring.)
 
-Parameters (``config/nodes.yaml``):
-
-- ``model_file`` (str): a rig YAML with optional ``model:`` overrides (or any kind
-  :mod:`brake_hil.live.model_file` has a loader for). Default ``config/rig_default.yaml``.
-- ``mean_pressure`` (float, Pa, 0.9e6): mean master-cylinder pressure the model's
-  coefficients are derived at (the isothermal air modulus, eq. 18). The chain passes the
-  replayed recording's mean ``p_i``.
-- ``loop_period`` (float, s, 0.001): tick period.
-- ``spin_margin_us`` (int, 150): the loop sleeps until this long before a deadline, then spins.
-- ``phase_lock`` (bool, true): place ticks just after the input's usual arrival phase.
-- ``input_late_ms`` (float, 5.0) / ``input_silent_ms`` (float, 50.0): no input sample for this
-  long makes the input LATE (WARN) / SILENT (ERROR) on diagnostics, reported at the next tick.
-- ``hold_mode`` (str, ``report``): ``report`` invents nothing; ``hold`` free-runs on the last
-  input once SILENT, one step a period, the held predictions counted and the input status
-  saying so (WARN). Late real samples whose stamps the hold already covered are dropped.
-- ``frame_id`` (str, ``caliper``): ``header.frame_id`` of the predictions.
-- ``diagnostics_period`` (float, s, 1.0): period of the ``/diagnostics`` report; input state
-  changes are reported at once.
-- ``realtime_priority`` (int, 0): SCHED_FIFO priority of the loop thread; the node's other
-  threads (the middleware's receive threads) run one above, so arrivals are never held off
-  by the loop (0: normal scheduling for all). Needs CAP_SYS_NICE; reported on diagnostics
-  (``sched_fifo``).
-- ``statistics_file`` (str, ""): write the whole run's timing (JSON) there at shutdown.
+Parameters: :class:`~brake_hil.nodes.settings.CaliperModelSettings` (``config/nodes.yaml``).
+No input sample for ``input_late_ms`` / ``input_silent_ms`` makes the input LATE (WARN) /
+SILENT (ERROR) on diagnostics, reported at the next tick. With ``hold_mode: hold`` the model
+free-runs on the last input once SILENT, one step a period, the held predictions counted and
+the input status saying so (WARN); late real samples whose stamps the hold already covered are
+dropped. Input state changes are reported at once, the rest every ``diagnostics_period``.
+``sched_fifo`` on diagnostics reports whether ``realtime_priority`` took effect.
 
 Diagnostics (``/diagnostics``): ``caliper_model: loop`` (period error, tick work, step time,
 input wait (arrival to its tick), input-to-prediction latency (arrival to published), stamp
@@ -67,7 +51,7 @@ from rclpy.exceptions import ParameterException
 from brake_hil.errors import BrakeHilError
 from brake_hil.live.model_file import load_model
 from brake_hil.nodes import common
-from brake_hil.physics.parameters import DEFAULT_MEAN_PRESSURE
+from brake_hil.nodes.settings import CaliperModelSettings
 from brake_hil.runtime import (
     CatchUpRunner,
     DeadlineLoop,
@@ -99,40 +83,30 @@ class CaliperModelNode(common.LoopNode):
         # No parameter services: nothing spins this node but its loop (parameters are
         # read-only, set at start from the command line or a params file).
         super().__init__(NAME, start_parameter_services=False)
-        declare = common.declare
-        model_file = declare(
-            self, "model_file", str(common.config_path("rig_default.yaml")), "model file"
-        )
-        mean_pressure = declare(
-            self, "mean_pressure", DEFAULT_MEAN_PRESSURE, "mean p_i the model is derived at, Pa"
-        )
-        period_ns = round(declare(self, "loop_period", 0.001, "tick period, s") * 1e9)
-        spin_ns = declare(self, "spin_margin_us", 150, "spin before each deadline, us") * 1000
-        phase_lock = declare(self, "phase_lock", True, "tick just after the input arrives")
-        late_ns = round(declare(self, "input_late_ms", 5.0, "input LATE after, ms") * 1e6)
-        silent_ns = round(declare(self, "input_silent_ms", 50.0, "input SILENT after, ms") * 1e6)
-        hold = declare(self, "hold_mode", HoldMode.REPORT.value, "report | hold")
-        frame_id = declare(self, "frame_id", "caliper", "header.frame_id of predictions")
-        report_s = declare(self, "diagnostics_period", 1.0, "diagnostics period, s")
-        priority = declare(self, "realtime_priority", 0, "SCHED_FIFO priority, 0: none")
-        self._statistics_file = declare(self, "statistics_file", "", "timing JSON at exit")
+        settings = common.declare_settings(self, CaliperModelSettings)
+        self.settings = settings
+        period_ns = round(settings.loop_period * 1e9)
         try:
-            hold_mode = HoldMode(hold)
+            hold_mode = HoldMode(settings.hold_mode)
         except ValueError as err:
-            raise BrakeHilError(f"hold_mode must be report or hold, got {hold!r}") from err
+            raise BrakeHilError(
+                f"hold_mode must be report or hold, got {settings.hold_mode!r}"
+            ) from err
 
-        self.model = load_model(model_file, float(mean_pressure))
+        self.model = load_model(settings.model_file, settings.mean_pressure)
         self.statistics = LoopStatistics()
         self._runner = CatchUpRunner(
             self.model.stepper(),
             period_ns=period_ns,
-            late_after_ns=late_ns,
-            silent_after_ns=silent_ns,
+            late_after_ns=round(settings.input_late_ms * 1e6),
+            silent_after_ns=round(settings.input_silent_ms * 1e6),
             hold_mode=hold_mode,
             statistics=self.statistics,
         )
-        self._phase_lock = PhaseLock(period_ns) if phase_lock else None
-        self._builders = [common.RawMessageBuilder(spec, frame_id) for spec in PREDICTED_OUTPUTS]
+        self._phase_lock = PhaseLock(period_ns) if settings.phase_lock else None
+        self._builders = [
+            common.RawMessageBuilder(spec, settings.frame_id) for spec in PREDICTED_OUTPUTS
+        ]
         self._outputs = [
             self.create_publisher(common.message_class(spec), spec.name, common.SAMPLE_QOS)
             for spec in PREDICTED_OUTPUTS
@@ -146,27 +120,27 @@ class CaliperModelNode(common.LoopNode):
         # Taken by the loop itself at each tick (no executor: no second Python thread to
         # contend for the GIL at the deadline).
         self._input = common.PolledInput(self, MASTER_CYLINDER_PRESSURE)
-        self._report_every = max(1, round(report_s * 1e9 / period_ns))
+        self._report_every = max(1, round(settings.diagnostics_period * 1e9 / period_ns))
         self._relock_every = max(1, round(1e9 / period_ns))
         self._last_report = self._last_relock = 0  # report / relock windows (slot numbers)
         self._wall_to_monotonic = time.monotonic_ns() - time.time_ns()
         self._loop = DeadlineLoop(
             self._tick,
             period_ns=period_ns,
-            spin_ns=spin_ns,
+            spin_ns=settings.spin_margin_us * 1000,
             statistics=self.statistics,
-            realtime_priority=priority,
+            realtime_priority=settings.realtime_priority,
             on_error=self._on_loop_error,
             idle=self._take_input,  # samples are taken in while spinning to the deadline
             name="caliper-model-loop",
         )
         self.get_logger().info(f"{self.model.description} from {self.model.path}")
-        if priority > 0:
+        if settings.realtime_priority > 0:
             # The middleware's receive threads one step above the loop: a sample is taken in
             # as it arrives, even while the loop spins towards its deadline (a loop above them
             # would hold them off, delaying arrivals until after its tick, and the phase lock
             # would chase them).
-            set_process_realtime_priority(min(99, priority + 1))
+            set_process_realtime_priority(min(99, settings.realtime_priority + 1))
         self._loop.start()
 
     # -- the loop (its own thread) -----------------------------------------------------
@@ -314,7 +288,7 @@ class CaliperModelNode(common.LoopNode):
             f"{counters.samples} samples in, {counters.predictions} predictions out, "
             f"{counters.overruns} overruns, {counters.late_ticks} ticks over 1 ms late"
         )
-        common.write_summary(self._statistics_file, summary)
+        common.write_summary(self.settings.statistics_file, summary)
 
 
 def main(args: list[str] | None = None) -> int:

@@ -1,6 +1,8 @@
 """What the brake_hil nodes share: environment, QoS, messages of topics.py, diagnostics, spinning.
 
 * :func:`setup_environment` keeps DDS discovery on loopback unless the caller chose otherwise.
+* :func:`declare_settings`: a node's parameters from its settings dataclass
+  (:mod:`brake_hil.nodes.settings`), declared read-only with their descriptions.
 * :data:`SAMPLE_QOS`: the 1 kHz sample topics are reliable, volatile, keep-last 1000 (one
   second at 1 kHz: a subscriber that stalls for less than that loses nothing).
 * Messages of a contract topic, ``header.stamp`` = the sample's acquisition time, the value in
@@ -30,7 +32,7 @@ import struct
 import sys
 import threading
 import time
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Vector3Stamped, WrenchStamped
@@ -44,8 +46,12 @@ from rclpy.signals import SignalHandlerOptions
 from sensor_msgs.msg import FluidPressure
 
 from brake_hil.io.stamped_cdr import FLOAT_FIELDS
+from brake_hil.nodes.settings import parameter_specs
 from brake_hil.runtime import TimingSummary
 from brake_hil.topics import TopicSpec
+
+if TYPE_CHECKING:
+    from _typeshed import DataclassInstance
 
 DIAGNOSTICS_TOPIC = "/diagnostics"
 """Where every node publishes its health (``diagnostic_msgs/msg/DiagnosticArray``)."""
@@ -78,6 +84,7 @@ MESSAGE_CLASSES: dict[str, Any] = {
     "geometry_msgs/msg/Vector3Stamped": Vector3Stamped,
 }
 NS_PER_S = 1_000_000_000
+SettingsT = TypeVar("SettingsT", bound="DataclassInstance")
 
 
 def setup_environment() -> None:
@@ -236,10 +243,27 @@ def wait_for_acks(publishers: Iterable[Any], timeout_s: float = 1.0) -> bool:
     return acked
 
 
-def declare(node: Node, name: str, default: Any, description: str) -> Any:
-    """Declare a read-only parameter with its description; return its value."""
-    descriptor = ParameterDescriptor(description=description, read_only=True)
-    return node.declare_parameter(name, default, descriptor).value
+def declare_settings(node: Node, settings: type[SettingsT]) -> SettingsT:
+    """Declare every field of a settings dataclass as a read-only ROS parameter; return the
+    dataclass filled with the parameters' values.
+
+    Each parameter gets the field's default (a ``package_file`` default as that file of
+    :func:`config_path`) and its description and unit in the ``ParameterDescriptor``
+    (:mod:`brake_hil.nodes.settings`).
+
+    Raises:
+        rclpy.exceptions.ParameterException: a value of the wrong type (from rclpy).
+    """
+    values: dict[str, Any] = {}
+    for spec in parameter_specs(settings):
+        default = spec.default
+        if spec.package_file:
+            default = str(config_path(spec.package_file_name))
+        descriptor = ParameterDescriptor(description=spec.text, read_only=True)
+        ros_default = list(default) if isinstance(default, tuple) else default
+        value = node.declare_parameter(spec.name, ros_default, descriptor).value
+        values[spec.name] = spec.convert(value)
+    return settings(**values)
 
 
 def _text(value: object) -> str:

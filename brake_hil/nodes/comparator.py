@@ -20,11 +20,9 @@ hold (no Python callback per message: six 1 kHz topics cost a few per cent of a 
 once a cycle it scores. There is no executor, hence no parameter services: the
 parameters are read-only, set at start.
 
-Parameters (``config/nodes.yaml``): ``excitation_hz`` (5.0), ``window_cycles`` (10),
-``sample_period`` (s, 0.001), ``ptp_ratio_warn_pct`` (10) / ``ptp_ratio_error_pct`` (25):
-``|ratio - 100|``; ``tau_over_T_warn_pct`` (2.5) / ``tau_over_T_error_pct`` (5): ``|tau/T|``;
-``nrmse_warn`` (0.15) / ``nrmse_error`` (0.3); ``summary_file`` (str, ""): at shutdown, the
-run's per-channel means over every steady cycle scored, as JSON.
+Parameters: :class:`~brake_hil.nodes.settings.ComparatorSettings` (``config/nodes.yaml``); at
+shutdown the run's per-channel means over every steady cycle scored go to ``summary_file``
+as JSON.
 """
 
 from __future__ import annotations
@@ -43,13 +41,13 @@ from brake_hil.analysis.stamp_scoring import (
     METRIC_KEYS,
     PairedWindow,
     StampPairer,
-    Thresholds,
     WindowResult,
     evaluate_cycle,
     peak_stamp_ns,
 )
 from brake_hil.errors import BrakeHilError
 from brake_hil.nodes import common
+from brake_hil.nodes.settings import ComparatorSettings
 from brake_hil.runtime import DeadlineLoop, Tick
 from brake_hil.topics import MEASURED_OUTPUTS, OUTPUT_CHANNELS, PREDICTED_OUTPUTS
 
@@ -65,18 +63,10 @@ class ComparatorNode(common.LoopNode):
         # One thread does all the work (no executor, so no parameter services): it takes the
         # six 1 kHz topics in batches every 50 ms, without a Python callback per message.
         super().__init__(NAME, start_parameter_services=False)
-        declare = common.declare
-        excitation_hz = float(declare(self, "excitation_hz", 5.0, "excitation frequency, Hz"))
-        self._window_cycles = int(declare(self, "window_cycles", 10, "rolling window, cycles"))
-        sample_period = float(declare(self, "sample_period", 0.001, "sample period, s"))
-        defaults = Thresholds()
-        self.thresholds = Thresholds(
-            **{
-                name: float(declare(self, name, getattr(defaults, name), "level threshold"))
-                for name in defaults.__dataclass_fields__
-            }
-        )
-        self._summary_file = declare(self, "summary_file", "", "run summary JSON at exit")
+        self.settings = settings = common.declare_settings(self, ComparatorSettings)
+        excitation_hz, sample_period = settings.excitation_hz, settings.sample_period
+        self._window_cycles = settings.window_cycles
+        self.thresholds = settings.thresholds
         if not excitation_hz > 0.0 or self._window_cycles < 1 or not sample_period > 0.0:
             raise BrakeHilError("excitation_hz, window_cycles and sample_period must be > 0")
         self.period_s = 1.0 / excitation_hz
@@ -271,7 +261,7 @@ class ComparatorNode(common.LoopNode):
                     f"{key} {entry[key]:.4g}" for key in METRIC_KEYS if math.isfinite(entry[key])
                 )
                 self.get_logger().info(f"{channel}: {text} over {entry['cycles']} cycles")
-        common.write_summary(self._summary_file, summary)
+        common.write_summary(self.settings.summary_file, summary)
 
 
 def main(args: list[str] | None = None) -> int:

@@ -29,30 +29,12 @@ time. Two modes:
     diagnostic at once (within ``stale_after_ms`` + 1 ms); a lost adapter is reopened with
     backoff, without crashing.
 
-Parameters (``config/nodes.yaml``):
-
-- ``mode`` (``replay`` | ``can``), ``publish_measured`` (true: also ``p_b``, ``F_k``, ``x_c``,
-  ``p_a``), ``frame_id`` (``caliper``), ``spin_margin_us`` (50: replay pacing needs no
-  tighter timing than the kernel's wake-up), ``realtime_priority`` (0:
-  normal scheduling; else SCHED_FIFO for the replay/acquisition thread, the node's other
-  threads one below), ``diagnostics_period`` (s, 1.0), ``statistics_file`` (""; else counts
-  and replay timing as JSON at shutdown).
-- replay: ``recording`` (path), ``rate`` (1.0), ``loop`` (false), ``start_offset`` (s, 0),
-  ``duration`` (s, 0: to the end), ``stamp_mode`` (``shift`` | ``keep``), ``exit_at_end``
-  (false: the node stays up after the replay), ``wait_for_subscribers`` (0: start once every
-  published topic has this many subscribers), ``wait_for_topics`` (``/topic`` or
-  ``/topic:N``: and these have one, or N), ``wait_timeout`` (s, 10: start anyway after it),
-  ``start_delay`` (s, 0.5, after the wait).
-- can: ``can_interface`` (``virtual``), ``can_channel``, ``can_bitrate`` (1000000),
-  ``dbc_file`` (``config/brake_rig.dbc``), ``stale_after_ms`` (5.0), ``can_sleep_after_open``
-  (s, 0; slcan only: some USB adapters reset when opened).
+Parameters: :class:`~brake_hil.nodes.settings.PressureSourceSettings` (``config/nodes.yaml``).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-import json
-from pathlib import Path
 import sys
 import threading
 import time
@@ -61,12 +43,12 @@ from typing import Any
 from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.exceptions import ParameterException
 from rclpy.node import Node
-from rclpy.parameter import Parameter
 
 from brake_hil.analysis.recording import Recording
 from brake_hil.errors import BrakeHilError
 from brake_hil.io.recording_reader import read_recording
 from brake_hil.nodes import common
+from brake_hil.nodes.settings import PressureSourceSettings
 from brake_hil.runtime import (
     LoopStatistics,
     StampMode,
@@ -110,39 +92,10 @@ class PressureSourceNode(Node):
 
     def __init__(self) -> None:
         super().__init__(NAME)
-        declare = common.declare
-        self.mode = declare(self, "mode", "replay", "replay | can")
-        recording = declare(self, "recording", "", "replay: the recording to play")
-        self._rate = float(declare(self, "rate", 1.0, "replay: rate factor (2.0: twice as fast)"))
-        self._loop = declare(self, "loop", False, "replay: start again at the end")
-        self._exit_at_end = declare(self, "exit_at_end", False, "replay: exit when finished")
-        self._start_offset = float(declare(self, "start_offset", 0.0, "replay: skip, s"))
-        self._duration = float(declare(self, "duration", 0.0, "replay: play this long, s"))
-        stamp_mode = declare(self, "stamp_mode", StampMode.SHIFT.value, "replay: shift | keep")
-        publish_measured = declare(self, "publish_measured", True, "also publish p_b, F_k, x_c")
-        self._frame_id = declare(self, "frame_id", "caliper", "header.frame_id")
-        self._wait_count = declare(self, "wait_for_subscribers", 0, "subscribers per topic")
-        self._wait_topics = self.declare_parameter("wait_for_topics", Parameter.Type.STRING_ARRAY)
-        self._wait_timeout = float(declare(self, "wait_timeout", 10.0, "longest wait, s"))
-        self._start_delay = float(declare(self, "start_delay", 0.5, "delay after the wait, s"))
-        self._spin_ns = 1000 * declare(self, "spin_margin_us", 50, "spin before deadlines, us")
-        self._priority = declare(self, "realtime_priority", 0, "SCHED_FIFO priority, 0: none")
-        report_s = declare(self, "diagnostics_period", 1.0, "diagnostics period, s")
-        self._statistics_file = declare(self, "statistics_file", "", "counts JSON at exit")
-        self._can = {
-            "interface": declare(self, "can_interface", "virtual", "can: python-can interface"),
-            "channel": declare(self, "can_channel", "brake_hil", "can: python-can channel"),
-            "bitrate": declare(self, "can_bitrate", 1_000_000, "can: bit/s"),
-            "dbc_path": declare(
-                self, "dbc_file", str(common.config_path("brake_rig.dbc")), "can: DBC file"
-            ),
-            "stale_after_s": declare(self, "stale_after_ms", 5.0, "can: stale after, ms") / 1e3,
-            "sleep_after_open": declare(
-                self, "can_sleep_after_open", 0.0, "can: slcan wait after opening, s"
-            ),
-        }
-        if self._rate <= 0.0:
-            raise BrakeHilError(f"rate must be positive, got {self._rate}")
+        self.settings = settings = common.declare_settings(self, PressureSourceSettings)
+        self.mode = settings.mode
+        if settings.rate <= 0.0:
+            raise BrakeHilError(f"rate must be positive, got {settings.rate}")
 
         self.statistics = LoopStatistics()
         self.published = 0  # samples (p_i messages)
@@ -157,16 +110,18 @@ class PressureSourceNode(Node):
         self._builders: dict[TopicSpec, common.RawMessageBuilder] = {}
         self._daq: Any = None
         if self.mode == "replay":
-            self._prepare_replay(recording, stamp_mode, publish_measured)
+            self._prepare_replay(
+                settings.recording, settings.stamp_mode, settings.publish_measured
+            )
             target: Callable[[], None] = self._replay
         elif self.mode == "can":
-            self._prepare_can(publish_measured)
+            self._prepare_can(settings.publish_measured)
             target = self._acquire
         else:
             raise BrakeHilError(f"mode must be replay or can, got {self.mode!r}")
-        self.create_timer(report_s, self._report)
-        if self._priority > 0:  # the worker one step above the node's other threads
-            set_process_realtime_priority(max(1, self._priority - 1))
+        self.create_timer(settings.diagnostics_period, self._report)
+        if settings.realtime_priority > 0:  # the worker one step above the node's other threads
+            set_process_realtime_priority(max(1, settings.realtime_priority - 1))
         self._thread = threading.Thread(target=self._guarded(target), name=NAME, daemon=True)
         self._thread.start()
 
@@ -175,7 +130,7 @@ class PressureSourceNode(Node):
             self._outputs[spec] = self.create_publisher(
                 common.message_class(spec), spec.name, common.SAMPLE_QOS
             )
-            self._builders[spec] = common.RawMessageBuilder(spec, self._frame_id)
+            self._builders[spec] = common.RawMessageBuilder(spec, self.settings.frame_id)
 
     def _guarded(self, target: Callable[[], None]) -> Callable[[], None]:
         def run() -> None:
@@ -198,15 +153,17 @@ class PressureSourceNode(Node):
             self._stamp_mode = StampMode(stamp_mode)
         except ValueError as err:
             raise BrakeHilError(f"stamp_mode must be shift or keep, got {stamp_mode!r}") from err
+        settings = self.settings
         recording = read_recording(path)
         time_s = recording.time
-        keep = time_s >= self._start_offset - 1e-9
-        if self._duration > 0.0:
-            keep &= time_s < self._start_offset + self._duration - 1e-9
+        keep = time_s >= settings.start_offset - 1e-9
+        if settings.duration > 0.0:
+            keep &= time_s < settings.start_offset + settings.duration - 1e-9
         if keep.sum() < 2:
             raise BrakeHilError(
-                f"{path}: start_offset {self._start_offset} s and duration {self._duration} s "
-                f"leave fewer than 2 of its {time_s.size} samples ({time_s[-1]:.3f} s long)"
+                f"{path}: start_offset {settings.start_offset} s and duration "
+                f"{settings.duration} s leave fewer than 2 of its {time_s.size} samples "
+                f"({time_s[-1]:.3f} s long)"
             )
         stamps = recording.start_stamp_ns + (time_s[keep] * 1e9).round().astype("int64")
         channels = replay_channels(recording, publish_measured)
@@ -216,7 +173,7 @@ class PressureSourceNode(Node):
         self.recording = recording
         self.get_logger().info(
             f"replaying {path}: {stamps.size} samples of {', '.join(s.name for s in channels)} "
-            f"at rate {self._rate:g}{', looped' if self._loop else ''}"
+            f"at rate {settings.rate:g}{', looped' if settings.loop else ''}"
         )
 
     def _wait_for_graph(self) -> None:
@@ -226,12 +183,12 @@ class PressureSourceNode(Node):
         (what the middleware will deliver to); on other topics, of subscriptions on the graph.
         """
         own = {pub.topic_name: pub for pub in self._outputs.values()}
-        topics = dict.fromkeys(own, int(self._wait_count))
-        for entry in self._wait_topics.value or []:
+        topics = dict.fromkeys(own, self.settings.wait_for_subscribers)
+        for entry in self.settings.wait_for_topics:
             if not entry.strip():
                 continue
-            name, _, count = entry.strip().partition(":")
-            topics[name] = max(topics.get(name, 0), int(count or 1))
+            name, _, wanted = entry.strip().partition(":")
+            topics[name] = max(topics.get(name, 0), int(wanted or 1))
 
         def count(name: str) -> int:
             publisher = own.get(name)
@@ -239,7 +196,7 @@ class PressureSourceNode(Node):
                 return int(publisher.get_subscription_count())
             return int(self.count_subscribers(name))
 
-        deadline = time.monotonic() + self._wait_timeout
+        deadline = time.monotonic() + self.settings.wait_timeout
         while not self._stop.is_set():
             short = {n: c for n, c in topics.items() if count(n) < c}
             if not short:
@@ -252,22 +209,23 @@ class PressureSourceNode(Node):
 
     def _replay(self) -> None:
         set_timer_slack(1)
-        set_realtime_priority(self._priority)
+        set_realtime_priority(self.settings.realtime_priority)
         self._wait_for_graph()
-        self._stop.wait(self._start_delay)
+        self._stop.wait(self.settings.start_delay)
         stamps = self._stamps
         span = loop_span_ns(stamps)
         start = time.monotonic_ns() + 1_000_000
         wall_start = time.time_ns() + (start - time.monotonic_ns())
         offset = wall_start - int(stamps[0]) if self._stamp_mode is StampMode.SHIFT else 0
-        deadlines = replay_deadlines(stamps, start, self._rate).tolist()
-        pass_duration = round(span / self._rate)
+        deadlines = replay_deadlines(stamps, start, self.settings.rate).tolist()
+        pass_duration = round(span / self.settings.rate)
         stamp_list = stamps.tolist()
         specs = list(self._values)
         columns = [self._values[spec] for spec in specs]
         publishers = [self._outputs[spec] for spec in specs]
         builders = [self._builders[spec] for spec in specs]
         stats = self.statistics
+        spin_ns = 1000 * self.settings.spin_margin_us
         self.state = "playing"
         while not self._stop.is_set():
             shift = self.passes * pass_duration
@@ -275,7 +233,7 @@ class PressureSourceNode(Node):
             for index, deadline in enumerate(deadlines):
                 if self._stop.is_set():
                     break
-                wake = sleep_until(deadline + shift, self._spin_ns)
+                wake = sleep_until(deadline + shift, spin_ns)
                 stats.add("period_error", wake - deadline - shift)
                 stamp = stamp_list[index] + stamp_shift
                 for column, publisher, build in zip(columns, publishers, builders):
@@ -283,14 +241,14 @@ class PressureSourceNode(Node):
                 self.published += 1
             else:
                 self.passes += 1
-                if self._loop:
+                if self.settings.loop:
                     continue
             break
         if not self._stop.is_set():
             self.state = "finished"
             self.get_logger().info(f"replay finished: {self.published} samples published")
             self._report()
-            if self._exit_at_end:
+            if self.settings.exit_at_end:
                 self.exit_requested.set()
 
     # -- CAN ---------------------------------------------------------------------------
@@ -298,31 +256,31 @@ class PressureSourceNode(Node):
     def _prepare_can(self, publish_measured: bool) -> None:
         from brake_hil.io.can_daq import CanDaq
 
-        can = self._can
-        options = {"sleep_after_open": float(can["sleep_after_open"])}
+        settings = self.settings
+        options = {"sleep_after_open": settings.can_sleep_after_open}
         self._daq = CanDaq(
-            str(can["interface"]),
-            str(can["channel"]),
-            int(can["bitrate"]),
-            dbc_path=str(can["dbc_path"]),
-            stale_after_s=float(can["stale_after_s"]),
-            bus_kwargs=options if can["interface"] == "slcan" else None,
+            settings.can_interface,
+            settings.can_channel,
+            settings.can_bitrate,
+            dbc_path=settings.dbc_file,
+            stale_after_s=settings.stale_after_ms / 1e3,
+            bus_kwargs=options if settings.can_interface == "slcan" else None,
         )
         self._daq.open()  # an unknown interface fails here; a missing adapter is retried
         quantities = self._daq.codec.quantities
         unknown = [q for q in quantities if q not in QUANTITY_TOPICS]
         if unknown:
-            raise BrakeHilError(f"{can['dbc_path']}: no topic for the quantities {unknown}")
+            raise BrakeHilError(f"{settings.dbc_file}: no topic for the quantities {unknown}")
         self._quantities = [q for q in quantities if publish_measured or q == "p_i"]
         self._advertise([QUANTITY_TOPICS[q] for q in self._quantities])
         self.get_logger().info(
-            f"acquiring {', '.join(self._quantities)} from CAN {can['interface']} "
-            f"{can['channel']} at {can['bitrate']} bit/s"
+            f"acquiring {', '.join(self._quantities)} from CAN {settings.can_interface} "
+            f"{settings.can_channel} at {settings.can_bitrate} bit/s"
         )
 
     def _acquire(self) -> None:
         set_timer_slack(1)
-        set_realtime_priority(self._priority)
+        set_realtime_priority(self.settings.realtime_priority)
         daq = self._daq
         routes = {
             q: (self._outputs[QUANTITY_TOPICS[q]], self._builders[QUANTITY_TOPICS[q]])
@@ -366,7 +324,7 @@ class PressureSourceNode(Node):
             ("published", self.published),
             ("samples", int(self._stamps.size)),
             ("passes", self.passes),
-            ("rate", self._rate),
+            ("rate", self.settings.rate),
             ("stamp_mode", self._stamp_mode.value),
             ("recording", str(self.recording.path)),
             *common.timing_values({"period_error": window["period_error"]}),
@@ -383,8 +341,8 @@ class PressureSourceNode(Node):
         values = {
             **{key: value for key, value in health._asdict().items() if key != "status"},
             "published": self.published,
-            "interface": self._can["interface"],
-            "channel": self._can["channel"],
+            "interface": self.settings.can_interface,
+            "channel": self.settings.can_channel,
         }
         level = common.ERROR if self.state.startswith("failed") else health.status.diagnostic_level
         return common.diagnostic_status(f"{NAME}: daq", level, message, values)
@@ -395,8 +353,8 @@ class PressureSourceNode(Node):
         self._thread.join(2.0)
         if self.context.ok():
             common.wait_for_acks(self._outputs.values())
-        if self._statistics_file:
-            summary = {
+        if self.settings.statistics_file:
+            summary: dict[str, Any] = {
                 "mode": self.mode,
                 "state": self.state,
                 "published": self.published,
@@ -407,9 +365,7 @@ class PressureSourceNode(Node):
                 health = self._daq.health()._asdict()
                 summary["daq"] = {k: v for k, v in health.items() if k != "status"}
                 summary["daq"]["status"] = health["status"].value
-            path = Path(self._statistics_file)
-            path.parent.mkdir(parents=True, exist_ok=True)
-            path.write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+            common.write_summary(self.settings.statistics_file, summary)
 
 
 def main(args: list[str] | None = None) -> int:

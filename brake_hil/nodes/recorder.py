@@ -7,20 +7,7 @@ each message at its receive time (system clock when its callback runs; rclpy's
 EventsExecutor cannot pass the middleware's MessageInfo); ``header.stamp`` stays inside the
 message.
 
-Parameters (see ``config/recorder.yaml``):
-
-- ``output_dir`` (str, ``"bags"``): where the recording directory is made.
-- ``bag_name`` (str, ``""``): its name; empty: ``brake_hil_<UTC date-time>``.
-- ``topics`` (str[], ``["/brake/**", "/diagnostics"]``): topic globs; ``*`` matches within
-  one name level, ``**`` across levels.
-- ``max_file_bytes`` (int, 0): split files at this size (bytes); 0: no size limit.
-- ``max_file_duration_s`` (float, 0.0): split files after this span of log time (s); 0: none.
-- ``chunk_bytes`` (int, 1048576): MCAP chunk size (bytes), the unit that reaches the disk.
-- ``flush_interval_s`` (float, 1.0): commit the chunk in progress at least this often (s), so
-  ``kill -9`` loses at most this long (or ``chunk_bytes``) of messages.
-- ``discovery_interval_s`` (float, 0.2): how often the ROS graph is searched for new topics (s).
-- ``qos_depth`` (int, 5000): history depth of the reliable subscriptions (samples; 5 s at 1 kHz,
-  Fast DDS's default per-reader sample limit).
+Parameters: :class:`~brake_hil.nodes.settings.RecorderSettings` (``config/recorder.yaml``).
 
 Subscriptions are reliable, volatile, keep-last ``qos_depth``; a topic whose publishers offer
 only best effort is subscribed best effort (a reliable reader would not match them). The
@@ -34,7 +21,6 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from datetime import UTC, datetime
-import functools
 import importlib
 from pathlib import Path
 import re
@@ -55,8 +41,7 @@ from rosbags.interfaces import (
 
 from brake_hil.io.mcap_recorder import McapRecorder
 from brake_hil.nodes import common
-
-DEFAULT_TOPICS = ["/brake/**", "/diagnostics"]
+from brake_hil.nodes.settings import RecorderSettings
 
 
 def topic_pattern(globs: Sequence[str]) -> re.Pattern[str]:
@@ -99,40 +84,25 @@ class RecorderNode(Node):
 
     def __init__(self) -> None:
         super().__init__("recorder")
-        declare = functools.partial(common.declare, self)
-        output_dir = declare("output_dir", "bags", "where the recording directory is made")
-        bag_name = declare("bag_name", "", "recording directory name; empty: date-time")
-        globs = declare("topics", DEFAULT_TOPICS, "topic globs to record (* one level, ** any)")
-        max_bytes = int(declare("max_file_bytes", 0, "split at this file size (bytes); 0: none"))
-        max_duration = float(
-            declare("max_file_duration_s", 0.0, "split after this log-time span (s); 0: none")
-        )
-        chunk_bytes = int(declare("chunk_bytes", 1 << 20, "MCAP chunk size (bytes)"))
-        flush_interval = float(
-            declare("flush_interval_s", 1.0, "commit the open chunk this often (s)")
-        )
-        discovery_interval = float(
-            declare("discovery_interval_s", 0.2, "search the graph for topics this often (s)")
-        )
-        self._depth = int(declare("qos_depth", 5000, "subscription history depth (samples)"))
-
+        self.settings = settings = common.declare_settings(self, RecorderSettings)
+        bag_name = settings.bag_name
         if not bag_name:
             bag_name = "brake_hil_" + datetime.now(UTC).strftime("%Y_%m_%d-%H_%M_%S")
-        self.bag_path = Path(output_dir) / bag_name
+        self.bag_path = Path(settings.output_dir) / bag_name
         self._recorder = McapRecorder(
             self.bag_path,
-            max_file_bytes=max_bytes or None,
-            max_file_duration_s=max_duration or None,
-            chunk_bytes=chunk_bytes,
+            max_file_bytes=settings.max_file_bytes or None,
+            max_file_duration_s=settings.max_file_duration_s or None,
+            chunk_bytes=settings.chunk_bytes,
             custom_data={"recorder": "brake_hil recorder"},
         )
-        self._pattern = topic_pattern(list(globs))
+        self._pattern = topic_pattern(settings.topics)
         self._recorded: dict[str, Any] = {}
         self._skipped: set[str] = set()
-        self.get_logger().info(f"recording {list(globs)} into {self.bag_path}")
+        self.get_logger().info(f"recording {list(settings.topics)} into {self.bag_path}")
         self._discover()
-        self.create_timer(discovery_interval, self._discover)
-        self.create_timer(flush_interval, self._recorder.flush)
+        self.create_timer(settings.discovery_interval_s, self._discover)
+        self.create_timer(settings.flush_interval_s, self._recorder.flush)
 
     def _discover(self) -> None:
         for name, types in self.get_topic_names_and_types():
@@ -157,7 +127,7 @@ class RecorderNode(Node):
         reliability = ReliabilityPolicy.BEST_EFFORT if best_effort else ReliabilityPolicy.RELIABLE
         qos = QoSProfile(
             history=HistoryPolicy.KEEP_LAST,
-            depth=self._depth,
+            depth=self.settings.qos_depth,
             reliability=reliability,
             durability=DurabilityPolicy.VOLATILE,
         )

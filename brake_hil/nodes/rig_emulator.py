@@ -20,22 +20,19 @@ Outputs (``output``):
 ``both``
     Both at once.
 
-Parameters (``config/rig_emulator.yaml``): ``rig_file`` (the truth rig; default
-``config/rig_default.yaml``), ``simulator`` (``virtual_rig``: the higher-fidelity simulator
-with ``effects``, e.g. ``["seal_stick_slip"]``; ``lti``: the seed's LTI model), ``effects``,
-``max_pressures`` (Pa), ``ramp_s``, ``pulsing_s``, ``pulsing_hz``, ``seed`` (sensor noise),
-``loop`` (replay the run forever, counter and stamps running on; false: exit at the end),
-``output``, ``can_interface``, ``can_channel``, ``can_bitrate``, ``can_link_path``,
-``dbc_file``, ``frame_id``, ``wait_for_subscribers`` (start once every sample topic has this
-many subscribers; 0: at once), ``wait_timeout_s`` (start anyway after this wait),
-``start_delay_s`` (then wait this long before the first sample), ``diagnostics_period_s``.
+Parameters: :class:`~brake_hil.nodes.settings.RigEmulatorSettings`
+(``config/rig_emulator.yaml``): the truth rig, the simulator (``virtual_rig``: the
+higher-fidelity simulator with ``effects``, e.g. ``["seal_stick_slip"]``; ``lti``: the seed's
+LTI model), the excitation (a :class:`~brake_hil.physics.excitation.PulsingSchedule`), the
+outputs, and when to start (once every sample topic has ``wait_for_subscribers`` subscribers,
+or after ``wait_timeout_s``; then ``start_delay_s``). With ``loop`` the run is replayed
+forever, counter and stamps running on; without, the node exits at its end.
 Health and timing go to ``/diagnostics``.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-import functools
 import sys
 import threading
 import time
@@ -47,7 +44,8 @@ from rclpy.node import Node
 
 from brake_hil.errors import BrakeHilError
 from brake_hil.nodes import common
-from brake_hil.physics.excitation import pulsing_profile
+from brake_hil.nodes.settings import RigEmulatorSettings
+from brake_hil.physics.excitation import DEFAULT_SCHEDULE, PulsingSchedule
 from brake_hil.physics.lti_model import ModelInput, discretize, simulate, state_space
 from brake_hil.physics.measurement import SENSORS, measure
 from brake_hil.physics.parameters import derive_parameters
@@ -79,14 +77,12 @@ def precompute_run(
     rig: Rig,
     simulator: str = "virtual_rig",
     effects: Sequence[str] = (),
-    max_pressures: Sequence[float] = (1.38e6,),
-    ramp_s: float = 1.0,
-    pulsing_s: float = 5.0,
-    pulsing_hz: float = 5.0,
+    schedule: PulsingSchedule = DEFAULT_SCHEDULE,
     seed: int = 0,
 ) -> EmulatedRun:
-    """The run to play: the seed's ramp-then-pulse input (Pa) through a simulator, measured by
-    the DAQ (noise, 16-bit quantisation, :mod:`brake_hil.physics.measurement`).
+    """The run to play: the seed's ramp-then-pulse input (Pa, ``schedule``) through a
+    simulator, measured by the DAQ (noise, 16-bit quantisation,
+    :mod:`brake_hil.physics.measurement`).
 
     ``simulator``: ``virtual_rig`` (:func:`brake_hil.virtual_rig.simulate_rig`, with
     ``effects`` as ``parse_effect`` texts) or ``lti`` (:func:`brake_hil.physics.lti_model.simulate`
@@ -96,26 +92,23 @@ def precompute_run(
         BrakeHilError: an unknown simulator or effect, effects with ``lti``, a failed run.
     """
     if simulator == "virtual_rig":
-        from brake_hil.virtual_rig import parse_effect, seed_pulsing, simulate_rig
+        from brake_hil.virtual_rig import parse_effect, simulate_rig
+        from brake_hil.virtual_rig.excitation import seed_pulsing_from
 
-        excitation = seed_pulsing(
-            max_pressures, ramp_s=ramp_s, pulsing_s=pulsing_s, pulsing_hz=pulsing_hz
-        )
+        excitation = seed_pulsing_from(schedule)
         run = simulate_rig(rig, [parse_effect(text) for text in effects], excitation, seed=seed)
         return EmulatedRun(dict(run.measured), f"virtual rig: {excitation.label}")
     if simulator != "lti":
         raise BrakeHilError(f"simulator must be 'virtual_rig' or 'lti', got {simulator!r}")
     if effects:
         raise BrakeHilError(f"the lti simulator has no effects; got {list(effects)}")
-    _, pressure = pulsing_profile(
-        max_pressures, ramp_s=ramp_s, pulsing_s=pulsing_s, pulsing_hz=pulsing_hz
-    )
+    _, pressure = schedule.profile()
     model = discretize(state_space(derive_parameters(rig), ModelInput.MASTER_CYLINDER_PRESSURE))
     p_b, f_k, x_c = simulate(model, pressure)[:3]
     rng = np.random.default_rng(seed)
     true = {"p_i": pressure, "p_b": p_b, "F_k": f_k, "x_c": x_c}
     measured = {key: measure(values, SENSORS[key], rng) for key, values in true.items()}
-    return EmulatedRun(measured, f"lti model: pulsing {pulsing_hz:g} Hz")
+    return EmulatedRun(measured, f"lti model: pulsing {schedule.pulsing_hz:g} Hz")
 
 
 class _CanOutput:
@@ -166,43 +159,19 @@ class RigEmulatorNode(Node):
 
     def __init__(self) -> None:
         super().__init__(NAME)
-        declare = functools.partial(common.declare, self)
-        rig_file = declare("rig_file", "", "truth rig YAML; empty: config/rig_default.yaml")
-        simulator = declare("simulator", "virtual_rig", "virtual_rig or lti")
-        effects = declare("effects", [""], "virtual-rig effects, e.g. seal_stick_slip=0.5")
-        max_pressures = declare("max_pressures", [1.38e6], "pulsing maxima (Pa)")
-        ramp_s = declare("ramp_s", 1.0, "ramp to each maximum (s)")
-        pulsing_s = declare("pulsing_s", 5.0, "pulsing per maximum (s)")
-        pulsing_hz = declare("pulsing_hz", 5.0, "pulsing frequency (Hz)")
-        seed = declare("seed", 0, "sensor-noise seed")
-        self._loop_forever = bool(declare("loop", True, "replay forever; false: exit at end"))
-        self.output = declare("output", "topics", "topics, can or both")
-        can_interface = declare("can_interface", "slcan_pty", "slcan_pty or a python-can one")
-        can_channel = declare("can_channel", "", "python-can channel (not for slcan_pty)")
-        can_bitrate = declare("can_bitrate", 1_000_000, "CAN bitrate (bit/s)")
-        can_link = declare("can_link_path", "/tmp/brake_hil_rig_can", "symlink to the pty")
-        dbc_file = declare("dbc_file", "", "CAN database; empty: config/brake_rig.dbc")
-        frame_id = declare("frame_id", "caliper", "header.frame_id")
-        start_delay = float(declare("start_delay_s", 1.0, "wait before the first sample (s)"))
-        self._wait_for = int(
-            declare("wait_for_subscribers", 0, "start once each topic has this many readers")
-        )
-        self._wait_timeout = float(declare("wait_timeout_s", 30.0, "give up waiting after (s)"))
-        diagnostics_period = float(declare("diagnostics_period_s", 1.0, "diagnostics (s)"))
+        self.settings = settings = common.declare_settings(self, RigEmulatorSettings)
+        self.output = settings.output
         if self.output not in ("topics", "can", "both"):
             raise BrakeHilError(f"output must be topics, can or both, got {self.output!r}")
 
-        rig = load_rig(rig_file or common.config_path("rig_default.yaml"))
+        rig = load_rig(settings.rig_file or common.config_path("rig_default.yaml"))
         started = time.perf_counter()
         self.run = precompute_run(
             rig,
-            str(simulator),
-            [text for text in effects if text],
-            [float(p) for p in max_pressures],
-            float(ramp_s),
-            float(pulsing_s),
-            float(pulsing_hz),
-            int(seed),
+            settings.simulator,
+            [text for text in settings.effects if text],
+            settings.schedule,
+            settings.seed,
         )
         self.get_logger().info(
             f"{self.run.label}: {self.run.samples} samples computed in "
@@ -218,28 +187,28 @@ class RigEmulatorNode(Node):
                 publisher = self.create_publisher(
                     common.message_class(spec), spec.name, common.SAMPLE_QOS
                 )
-                self._outputs.append((publisher, common.MessageBuilder(spec, frame_id)))
+                self._outputs.append((publisher, common.MessageBuilder(spec, settings.frame_id)))
         self._can: _CanOutput | None = None
         if self.output in ("can", "both"):
             self._can = _CanOutput(
-                str(can_interface),
-                str(can_channel),
-                int(can_bitrate),
-                str(can_link),
-                str(dbc_file),
+                settings.can_interface,
+                settings.can_channel,
+                settings.can_bitrate,
+                settings.can_link_path,
+                settings.dbc_file,
             )
             self.get_logger().info(f"CAN frames on {self._can.where}")
         self._diagnostics = self.create_publisher(
             DiagnosticArray, common.DIAGNOSTICS_TOPIC, common.DIAGNOSTICS_QOS
         )
-        self.create_timer(diagnostics_period, self._report)
+        self.create_timer(settings.diagnostics_period_s, self._report)
 
         self.exit_requested = threading.Event()
         self.sent = 0  # samples played
         self.passes = 0
         self.statistics = LoopStatistics()
         self._wall_minus_monotonic = time.time_ns() - time.monotonic_ns()
-        self._start_delay_ns = round(start_delay * 1e9)
+        self._start_delay_ns = round(settings.start_delay_s * 1e9)
         self._first_deadline = 0
         self._loop = DeadlineLoop(
             self._tick,
@@ -254,9 +223,10 @@ class RigEmulatorNode(Node):
     def _start_when_subscribed(self) -> None:
         """Start playing once every topic has ``wait_for_subscribers`` readers (or at the
         timeout), ``start_delay_s`` later."""
-        ready = all(p.get_subscription_count() >= self._wait_for for p, _ in self._outputs)
+        wait_for = self.settings.wait_for_subscribers
+        ready = all(p.get_subscription_count() >= wait_for for p, _ in self._outputs)
         waited = time.monotonic() - self._waiting_since
-        if not ready and waited < self._wait_timeout:
+        if not ready and waited < self.settings.wait_timeout_s:
             return
         if not ready:
             self.get_logger().warning(f"starting without subscribers after {waited:.1f} s")
@@ -272,7 +242,7 @@ class RigEmulatorNode(Node):
             index = k % samples
             if index == 0 and k:
                 self.passes += 1
-                if not self._loop_forever:
+                if not self.settings.loop:
                     self._loop.stop(0)
                     self.exit_requested.set()
                     return

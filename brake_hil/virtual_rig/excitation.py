@@ -15,14 +15,11 @@ import math
 import numpy as np
 from scipy.signal import lfilter
 
-from brake_hil.physics.excitation import SEED_MAX_PRESSURES, pulsing_profile
+from brake_hil.physics.excitation import SAMPLE_RATE_HZ, SEED_MAX_PRESSURES, PulsingSchedule
 from brake_hil.physics.lti_model import ModelInput
 from brake_hil.physics.rig import Rig
 from brake_hil.types import FloatArray
 from brake_hil.virtual_rig.effects.base import EffectError
-
-SAMPLE_RATE_HZ = 1000.0
-"""Sample rate of the rig's acquisition (Hz)."""
 
 __all__ = [
     "SAMPLE_RATE_HZ",
@@ -31,7 +28,9 @@ __all__ = [
     "frequency_sweep",
     "pressure_ramp",
     "seed_pulsing",
+    "seed_pulsing_from",
     "solenoid_pulsing",
+    "solenoid_pulsing_from",
 ]
 
 
@@ -78,19 +77,29 @@ def seed_pulsing(
 ) -> Excitation:
     """The seed's master-cylinder pressure: per maximum pressure (Pa), a ramp then pulsing.
 
-    See :func:`brake_hil.physics.excitation.pulsing_profile`; ``SEED_MAX_PRESSURES`` gives the
-    seed's three segments (1.38, 2.07, 2.76 MPa).
+    :func:`seed_pulsing_from` of the :class:`~brake_hil.physics.excitation.PulsingSchedule`
+    of these arguments; ``SEED_MAX_PRESSURES`` gives the seed's three segments (1.38, 2.07,
+    2.76 MPa).
     """
-    time, pressure = pulsing_profile(
-        max_pressures,
-        sample_rate_hz=SAMPLE_RATE_HZ,
-        ramp_s=ramp_s,
-        pulsing_s=pulsing_s,
-        pulsing_hz=pulsing_hz,
-        amplitude_fraction=amplitude_fraction,
+    return seed_pulsing_from(
+        PulsingSchedule(
+            tuple(max_pressures),
+            ramp_s=ramp_s,
+            pulsing_s=pulsing_s,
+            pulsing_hz=pulsing_hz,
+            amplitude_fraction=amplitude_fraction,
+            sample_rate_hz=SAMPLE_RATE_HZ,
+        )
     )
-    levels = ", ".join(f"{p / 1e6:.2f}" for p in max_pressures)
-    label = f"seed pulsing {pulsing_hz:g} Hz, p_i max {levels} MPa, {pulsing_s:g} s each"
+
+
+def seed_pulsing_from(schedule: PulsingSchedule) -> Excitation:
+    """The master-cylinder pressure ``p_i`` of a schedule: its sine pulsing (Pa)."""
+    time, pressure = schedule.profile()
+    label = (
+        f"seed pulsing {schedule.pulsing_hz:g} Hz, p_i max {schedule.levels_mpa} MPa, "
+        f"{schedule.pulsing_s:g} s each"
+    )
     return Excitation(time, pressure, ModelInput.MASTER_CYLINDER_PRESSURE, label)
 
 
@@ -157,18 +166,49 @@ def solenoid_pulsing(
 ) -> Excitation:
     """The seed's actuation: a regulator ramps the air, a 3-way solenoid pulses it (``p_a``).
 
-    ``max_pressures`` are the intended maximum master-cylinder pressures (Pa); the air
-    pressure is scaled by ``A_i / A_a`` (the master cylinder's static gain, eq. 21a). The
-    solenoid switches the air cylinder between supply and a vented level as a square wave at
-    ``pulsing_hz``; the valve opens with a first-order lag ``valve_time_constant`` (s) and the
-    air cylinder fills and vents with a first-order lag ``pneumatic_time_constant`` (s), which
-    round the square into the near-sine the seed measured. The command swing is chosen so
-    that the air pressure swings ``+- amplitude_fraction`` of its maximum in steady pulsing.
+    :func:`solenoid_pulsing_from` of the
+    :class:`~brake_hil.physics.excitation.PulsingSchedule` of these arguments.
+    """
+    schedule = PulsingSchedule(
+        tuple(max_pressures),
+        ramp_s=ramp_s,
+        pulsing_s=pulsing_s,
+        pulsing_hz=pulsing_hz,
+        amplitude_fraction=amplitude_fraction,
+        sample_rate_hz=SAMPLE_RATE_HZ,
+    )
+    return solenoid_pulsing_from(
+        rig,
+        schedule,
+        valve_time_constant=valve_time_constant,
+        pneumatic_time_constant=pneumatic_time_constant,
+    )
+
+
+def solenoid_pulsing_from(
+    rig: Rig,
+    schedule: PulsingSchedule,
+    *,
+    valve_time_constant: float = 0.008,
+    pneumatic_time_constant: float = 0.04,
+) -> Excitation:
+    """The air pressure ``p_a`` (Pa) that drives the master cylinder through a schedule.
+
+    The schedule's maximum pressures are the intended maximum master-cylinder pressures (Pa);
+    the air pressure is scaled by ``A_i / A_a`` (the master cylinder's static gain, eq. 21a).
+    A regulator ramps the air; the solenoid switches the air cylinder between supply and a
+    vented level as a square wave at ``pulsing_hz``; the valve opens with a first-order lag
+    ``valve_time_constant`` (s) and the air cylinder fills and vents with a first-order lag
+    ``pneumatic_time_constant`` (s), which round the square into the near-sine the seed
+    measured. The command swing is chosen so that the air pressure swings ``+-
+    amplitude_fraction`` of its maximum in steady pulsing. Computed at 10 times the sample
+    rate, then sampled.
     """
     master = rig.master_cylinder
     gain = (master.diameter / master.air_piston_diameter) ** 2  # A_i / A_a
     oversample = 10
-    fine_rate = SAMPLE_RATE_HZ * oversample
+    fine = schedule.scaled(gain).at_rate(schedule.sample_rate_hz * oversample)
+    fine_rate, pulsing_hz = fine.sample_rate_hz, fine.pulsing_hz
 
     def pneumatics(command: FloatArray) -> FloatArray:
         response = command
@@ -185,19 +225,17 @@ def solenoid_pulsing(
 
     settled = pneumatics(square(20.0 / pulsing_hz))  # a unit square wave, 20 periods
     swing_gain = 0.5 * float(np.ptp(settled[-int(round(fine_rate / pulsing_hz)) :]))
+    shape = fine.ramp_shape()
+    pulses = square(fine.pulsing_s)
     pieces: list[FloatArray] = []
-    level = 0.0
-    ramp = np.arange(int(round(ramp_s * fine_rate))) / fine_rate
-    for max_pressure in max_pressures:
-        air_max = max_pressure * gain
-        swing = amplitude_fraction * air_max
-        mean = air_max - swing
-        pieces.append(level + (mean - level) * (0.5 - 0.5 * np.cos(math.pi * ramp / ramp_s)))
-        pieces.append(np.maximum(mean + swing / swing_gain * square(pulsing_s), 0.0))
-        level = mean
+    for segment in fine.segments:
+        pieces.append(segment.start + (segment.mean - segment.start) * shape)
+        pieces.append(np.maximum(segment.mean + segment.amplitude / swing_gain * pulses, 0.0))
     air = pneumatics(np.concatenate(pieces))
     air = np.concatenate([[0.0], air])[: air.size : oversample]
-    time = np.arange(air.size) / SAMPLE_RATE_HZ
-    levels = ", ".join(f"{p / 1e6:.2f}" for p in max_pressures)
-    label = f"solenoid pulsing {pulsing_hz:g} Hz, p_i max ~{levels} MPa, {pulsing_s:g} s each"
+    time = np.arange(air.size) / schedule.sample_rate_hz
+    label = (
+        f"solenoid pulsing {schedule.pulsing_hz:g} Hz, p_i max ~{schedule.levels_mpa} MPa, "
+        f"{schedule.pulsing_s:g} s each"
+    )
     return Excitation(time, air, ModelInput.AIR_PRESSURE, label)

@@ -19,6 +19,7 @@ from brake_hil.app.chain import ros_environment
 from brake_hil.io.can_daq import CanDaq, DaqStatus, DecodedSample
 from brake_hil.nodes import common
 from brake_hil.nodes.rig_emulator import precompute_run
+from brake_hil.physics.excitation import PulsingSchedule
 from brake_hil.physics.rig import load_rig
 
 pytest.importorskip("serial", reason="python-can's slcan interface needs pyserial")
@@ -66,8 +67,7 @@ def test_emulator_frames_over_slcan_decode_to_the_run_it_plays(tmp_path: Path) -
     run = precompute_run(
         load_rig(common.config_path("rig_default.yaml")),
         RUN["simulator"],
-        ramp_s=RUN["ramp_s"],
-        pulsing_s=RUN["pulsing_s"],
+        schedule=PulsingSchedule(ramp_s=RUN["ramp_s"], pulsing_s=RUN["pulsing_s"]),
         seed=RUN["seed"],
     )
     hydraulic = [s for s in got if s.frame == "BRAKE_HYDRAULIC"]

@@ -17,6 +17,7 @@ from brake_hil.app.chain import ros_environment
 from brake_hil.io.recording_reader import read_recording
 from brake_hil.nodes import common
 from brake_hil.nodes.rig_emulator import precompute_run
+from brake_hil.physics.excitation import PulsingSchedule
 from brake_hil.physics.rig import load_rig
 from brake_hil.topics import MEASURED_OUTPUTS
 
@@ -64,8 +65,7 @@ def test_recording_of_the_emulated_rig_is_the_run_it_played(tmp_path: Path) -> N
     run = precompute_run(
         load_rig(common.config_path("rig_default.yaml")),
         RUN["simulator"],
-        ramp_s=RUN["ramp_s"],
-        pulsing_s=RUN["pulsing_s"],
+        schedule=PulsingSchedule(ramp_s=RUN["ramp_s"], pulsing_s=RUN["pulsing_s"]),
         seed=RUN["seed"],
     )
     recording = read_recording(tmp_path / "bag", required=MEASURED_OUTPUTS)

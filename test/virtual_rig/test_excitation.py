@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from brake_hil.physics.excitation import SEED_MAX_PRESSURES
+from brake_hil.physics.excitation import SEED_MAX_PRESSURES, PulsingSchedule
 from brake_hil.physics.lti_model import ModelInput
 from brake_hil.physics.rig import Rig
 from brake_hil.virtual_rig import (
@@ -16,6 +16,7 @@ from brake_hil.virtual_rig import (
     seed_pulsing,
     solenoid_pulsing,
 )
+from brake_hil.virtual_rig.excitation import seed_pulsing_from, solenoid_pulsing_from
 from brake_hil.virtual_rig.simulator import master_pressure_estimate
 
 
@@ -64,3 +65,17 @@ def test_excitation_refuses_bad_samples() -> None:
         Excitation(time, np.array([0, 1, np.nan, 1, 0.0]), ModelInput.AIR_PRESSURE, "bad")
     with pytest.raises(EffectError, match="time must increase"):
         Excitation(time[::-1], np.zeros(5), ModelInput.AIR_PRESSURE, "bad")
+
+
+def test_seed_and_solenoid_pulsing_build_from_one_schedule(nominal_rig: Rig) -> None:
+    schedule = PulsingSchedule((1.1e6, 2.2e6), ramp_s=0.4, pulsing_s=0.8, pulsing_hz=6.0)
+    arguments = {"ramp_s": 0.4, "pulsing_s": 0.8, "pulsing_hz": 6.0}
+    seed = seed_pulsing((1.1e6, 2.2e6), **arguments)
+    from_schedule = seed_pulsing_from(schedule)
+    assert seed.pressure.tobytes() == from_schedule.pressure.tobytes()
+    assert seed.pressure.tobytes() == schedule.profile()[1].tobytes()
+    assert seed.label == from_schedule.label
+    solenoid = solenoid_pulsing(nominal_rig, (1.1e6, 2.2e6), **arguments)
+    solenoid_from_schedule = solenoid_pulsing_from(nominal_rig, schedule)
+    assert solenoid.pressure.tobytes() == solenoid_from_schedule.pressure.tobytes()
+    assert solenoid.time.size == schedule.samples
