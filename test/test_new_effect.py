@@ -1,0 +1,160 @@
+"""A tenth effect is one catalogue entry, one truth law and one candidate (CONTRIBUTING.md).
+
+A throw-away effect, a zero offset of the bore-pressure transducer, is registered at run time
+in the catalogue, in the virtual rig and in the diagnosis, with no edit anywhere else; the
+virtual rig then records it and the diagnosis, blind, names it and models it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+import dataclasses
+
+import numpy as np
+import pytest
+
+from brake_hil.diagnosis.candidates import (
+    CANDIDATES,
+    Candidate,
+    register_candidate,
+    unregister_candidate,
+)
+from brake_hil.diagnosis.candidates.base import CandidateParameter, Context, Draft
+from brake_hil.diagnosis.diagnose import diagnose
+from brake_hil.diagnosis.engine import Term
+from brake_hil.physics import catalogue
+from brake_hil.physics.catalogue import EffectEntry, Quantity
+from brake_hil.physics.rig import Rig
+from brake_hil.types import FloatArray
+from brake_hil.virtual_rig.effects import (
+    STRENGTH,
+    Effect,
+    Parameter,
+    parse_effect,
+    register_effect,
+    unregister_effect,
+)
+from brake_hil.virtual_rig.excitation import seed_pulsing
+from brake_hil.virtual_rig.laws import LtiPlant, TruthLaw
+from brake_hil.virtual_rig.simulator import simulate_rig
+
+# --------------------------------------------------------------------- 1. the catalogue entry
+
+ZERO_OFFSET = EffectEntry(
+    name="bore_sensor_offset",
+    title="the bore-pressure transducer reads a zero offset",
+    physics=(
+        "A strain-gauge pressure transducer whose zero has shifted (mounting torque, "
+        "temperature) adds a constant to every reading of p_b."
+    ),
+    source="measurement chain (not in the seed)",
+    signature="p_b off the prediction by a constant in every segment; F_k and x_c right",
+    channels=("p_b",),
+    quantities=(Quantity("p_0", "Pa", "zero offset of the p_b transducer"),),
+)
+
+# --------------------------------------------------------------------- 2. the truth law
+
+
+@dataclasses.dataclass(frozen=True)
+class _OffsetLaw(TruthLaw):
+    offset: float  # Pa
+    settling_time: float  # s: the zero drifts in after power-up (richer than the candidate)
+
+    def acquisition(self, channel: str, time: FloatArray, values: FloatArray) -> FloatArray:
+        if channel != "p_b":
+            return values
+        return values + self.offset * (1.0 - np.exp(-(time - time[0]) / self.settling_time))
+
+
+@dataclasses.dataclass(frozen=True)
+class _BoreSensorOffset(Effect):
+    """The bore-pressure transducer reads a zero offset that settles in after power-up.
+    Source: the measurement chain (not in the seed)."""
+
+    strength: float = 1.0
+    offset: float = 4.0e4
+    settling_time: float = 0.05
+
+    entry = ZERO_OFFSET
+    parameters = (
+        STRENGTH,
+        Parameter("offset", "Pa", -2.0e5, 2.0e5, "zero offset at strength 1"),
+        Parameter("settling_time", "s", 1.0e-3, 1.0, "time constant of the zero's settling"),
+    )
+    diagnosis_model = "a constant offset (the simulator's zero settles in exponentially)"
+
+    def law(self, plant: LtiPlant) -> _OffsetLaw:
+        del plant
+        return _OffsetLaw(self.strength * self.offset, self.settling_time)
+
+
+# --------------------------------------------------------------------- 3. the candidate
+
+
+@dataclasses.dataclass(frozen=True)
+class _ChannelOffset(Term):
+    offset: FloatArray  # (B,) Pa on p_b
+
+    def transform(self, outputs: FloatArray, sample_time: float) -> FloatArray:
+        outputs[:, 0, :] += self.offset[:, np.newaxis]
+        return outputs
+
+
+class _OffsetCandidate(Candidate):
+    """Bore-sensor offset: the p_b transducer adds a constant to every reading."""
+
+    entry = ZERO_OFFSET
+    parameters = (CandidateParameter("offset_p_b", "Pa", -2.0e5, 2.0e5, 0.0),)
+
+    def fill(self, draft: Draft, theta: FloatArray, context: Context) -> None:
+        draft.add(_ChannelOffset(theta[:, 0].copy()))
+
+
+# --------------------------------------------------------------------- the test
+
+
+@pytest.fixture
+def tenth_effect() -> Iterator[None]:
+    catalogue.register(ZERO_OFFSET)
+    try:
+        register_effect(_BoreSensorOffset)
+        register_candidate(_OffsetCandidate())
+        yield
+    finally:
+        unregister_candidate(ZERO_OFFSET.name)
+        unregister_effect(ZERO_OFFSET.name)
+        catalogue.unregister(ZERO_OFFSET.name)
+
+
+def test_a_tenth_effect_runs_through_the_virtual_rig_and_the_diagnosis(
+    tenth_effect: None, default_rig: Rig
+) -> None:
+    assert [c.name for c in CANDIDATES][-1] == "bore_sensor_offset"
+    truth = dataclasses.replace(
+        default_rig, caliper_stiffness=default_rig.caliper_stiffness * 1.05
+    )  # a parameter error within tolerance, as every benchmark case has
+    run = simulate_rig(
+        truth,
+        [parse_effect("bore_sensor_offset=1.0")],
+        seed_pulsing((1.38e6, 2.76e6), pulsing_s=3.0),
+        seed=3,
+    )
+    true_p_b, measured_p_b = run.bore_pressure, run.measured["p_b"]
+    assert abs(float(np.median(measured_p_b - true_p_b)) - 4.0e4) < 2.0e3
+
+    result = diagnose(run.as_recording(), default_rig)
+
+    assert result.effects == ("bore_sensor_offset",), result.explanation
+    fitted = result.improved.parameters()["offset_p_b"]
+    assert abs(fitted - 4.0e4) < 4.0e3, fitted
+    baseline, improved = result.baseline.held_out_nrmse, result.improved.held_out_nrmse
+    assert baseline["p_b"] > 5 * improved["p_b"], (baseline, improved)
+    assert result.confidence > 0.5
+    hypotheses = result.as_dict()["hypotheses"]
+    assert isinstance(hypotheses, list) and hypotheses[0]["effect"] == "bore_sensor_offset"
+
+
+def test_after_the_test_the_tenth_effect_is_gone() -> None:
+    assert "bore_sensor_offset" not in catalogue.CATALOGUE
+    assert "bore_sensor_offset" not in [c.name for c in CANDIDATES]
