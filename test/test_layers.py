@@ -136,3 +136,11 @@ def test_core_imports_without_rclpy(subpackage: str) -> None:
     )
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert result.returncode == 0, result.stderr
+
+
+def test_every_folder_of_the_package_is_a_package_that_says_what_it_exports() -> None:
+    # a folder without __init__.py is a namespace package: setup.py's find_packages (and so
+    # a wheel or a colcon install) would leave it out
+    folders = [p for p in PACKAGE.rglob("*") if p.is_dir() and p.name != "__pycache__"]
+    assert [str(f) for f in folders if not (f / "__init__.py").is_file()] == []
+    assert [str(f) for f in folders if "__all__" not in (f / "__init__.py").read_text()] == []

@@ -1,1 +1,14 @@
 """ROS 2 nodes: thin rclpy adapters around the core (each a launch-free console script)."""
+
+from __future__ import annotations
+
+__all__ = [
+    "caliper_model",
+    "chain",
+    "common",
+    "comparator",
+    "pressure_source",
+    "recorder",
+    "rig_emulator",
+    "settings",
+]

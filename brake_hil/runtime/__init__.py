@@ -25,6 +25,64 @@ the epoch).
 
 from __future__ import annotations
 
-from brake_hil.runtime.catch_up import *  # noqa: F403
-from brake_hil.runtime.deadline_loop import *  # noqa: F403
-from brake_hil.runtime.timing import *  # noqa: F403
+from brake_hil.live.model import Stepper
+from brake_hil.runtime.catch_up import (
+    CatchUpRunner,
+    HoldMode,
+    InputState,
+    Prediction,
+    Sample,
+    StampMode,
+    TickResult,
+    loop_span_ns,
+    replay_deadlines,
+)
+from brake_hil.runtime.deadline_loop import (
+    DeadlineLoop,
+    PhaseLock,
+    Tick,
+    set_process_realtime_priority,
+    set_realtime_priority,
+    set_timer_slack,
+    sleep_until,
+)
+from brake_hil.runtime.timing import (
+    DEFAULT_PERIOD_NS,
+    LATE_TICK_NS,
+    NS_PER_S,
+    NS_PER_US,
+    TIMING_NAMES,
+    Histogram,
+    LoopCounters,
+    LoopStatistics,
+    TimingSummary,
+)
+
+__all__ = [
+    "DEFAULT_PERIOD_NS",
+    "LATE_TICK_NS",
+    "NS_PER_S",
+    "NS_PER_US",
+    "TIMING_NAMES",
+    "CatchUpRunner",
+    "DeadlineLoop",
+    "Histogram",
+    "HoldMode",
+    "InputState",
+    "LoopCounters",
+    "LoopStatistics",
+    "PhaseLock",
+    "Prediction",
+    "Sample",
+    "StampMode",
+    "Stepper",
+    "Tick",
+    "TickResult",
+    "TimingSummary",
+    "loop_span_ns",
+    "replay_deadlines",
+    "set_process_realtime_priority",
+    "set_realtime_priority",
+    "set_timer_slack",
+    "sleep_until",
+]

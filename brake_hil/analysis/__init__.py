@@ -1,0 +1,12 @@
+"""Recordings as arrays and what the seed measures on them: signals and Table 4-5 metrics,
+characterisation (Table 3), compare, the comparator's stamp-paired scoring. ROS-free."""
+
+from __future__ import annotations
+
+__all__ = [
+    "characterization",
+    "comparison",
+    "recording",
+    "signals",
+    "stamp_scoring",
+]
