@@ -12,9 +12,11 @@ import pytest
 
 from brake_hil.physics import catalogue
 from brake_hil.physics.catalogue import EffectEntry, Quantity, effect_names
+from brake_hil.physics.rig import Rig
 from brake_hil.virtual_rig import (
     EFFECTS,
     EffectError,
+    build_plant,
     make_effect,
     parse_effect,
     seed_pulsing,
@@ -254,3 +256,48 @@ def test_sensor_nonlinearity_changes_only_its_channel_by_its_quadratic_law(
     resolution = 8.9e3 / (2**16 - 1)
     error = bent.measured["F_k"] - plain.measured["F_k"] - (expected - force)
     assert np.max(np.abs(error)) <= 1.01 * resolution
+
+
+@dataclass(frozen=True)
+class _WiderValve(TruthLaw):
+    factor: float
+
+    def valve_drop(
+        self,
+        flow: Signal,
+        linear_resistance: float,
+        viscosity_factor: Signal,
+        linear_factor: Signal,
+    ) -> Signal:
+        return self.factor * linear_resistance * linear_factor * flow
+
+
+@dataclass(frozen=True)
+class _WiderValveEffect(Effect):
+    """A throw-away effect replacing the valve's drop, for testing that two laws cannot
+    replace one part of the rig. Source: seed eqs. 15-17 (2012)."""
+
+    strength: float = 1.0
+
+    entry = EffectEntry(
+        name="wider_valve_test_only",
+        title="a throw-away valve law",
+        physics="The valve's resistance scaled.",
+        source="seed eqs. 15-17",
+        signature="p_b larger than predicted",
+        channels=("p_b",),
+        quantities=(),
+    )
+    parameters = (STRENGTH,)
+    diagnosis_model = "a line resistance"
+
+    def law(self, plant: LtiPlant) -> _WiderValve:
+        del plant
+        return _WiderValve(1.0 - 0.5 * self.strength)
+
+
+def test_two_laws_cannot_replace_one_part_of_the_rig(nominal_rig: Rig) -> None:
+    plant = build_plant(nominal_rig, [_WiderValveEffect()])
+    assert [type(law) for law in plant.laws] == [_WiderValve]
+    with pytest.raises(EffectError, match="orifice_flow and wider_valve_test_only both replace"):
+        build_plant(nominal_rig, [make_effect("orifice_flow"), _WiderValveEffect()])

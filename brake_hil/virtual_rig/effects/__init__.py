@@ -100,7 +100,7 @@ def effect_class(name: str) -> type[Effect]:
         raise EffectError(f"unknown effect {name!r} (known: {known})") from None
 
 
-for _cls in (
+_BUILT_IN = (
     SealStickSlip,
     SealGrooveAsymmetry,
     EntrainedAir,
@@ -111,8 +111,11 @@ for _cls in (
     ThermalDrift,
     SensorDelay,
     SensorNonlinearity,
-):
-    register_effect(_cls)
+)
+"""The truth laws of this package (EFFECTS orders them by the catalogue, not this tuple)."""
+for _truth_law in _BUILT_IN:
+    register_effect(_truth_law)
+del _truth_law
 
 
 def make_effect(name: str, strength: float = 1.0, **parameters: float | str) -> Effect:
