@@ -213,8 +213,10 @@ def _matmul(left: Matrix, right: Matrix) -> Matrix:
 
 
 def _expm_decimal(matrix: Matrix) -> Matrix:
-    """Matrix exponential at the current decimal precision: Taylor series after scaling the
-    norm below 1/2, then squaring (the digits to spare absorb the squarings' error growth).
+    """Matrix exponential at the current decimal precision.
+
+    Taylor series after scaling the norm below 1/2, then squaring (the digits to spare absorb
+    the squarings' error growth).
     """
     norm = max(sum((abs(value) for value in row), Decimal(0)) for row in matrix)
     squarings = 0
@@ -257,10 +259,11 @@ def _solve_decimal(matrix: Matrix, rhs: list[Decimal]) -> list[Decimal]:
 def exact_reference(
     system: StateSpace, pressure: FloatArray, sample_time: float, digits: int = REFERENCE_DIGITS
 ) -> FloatArray:
-    """Outputs (m, N) of ``x' = A x + B u`` with ``u`` linear between samples, from the
-    equilibrium at ``u[0]``: first-order hold in ``digits``-digit decimal arithmetic, stepped
-    sample by sample. Exact to double precision and independent of what :func:`simulate`
-    uses (scipy's expm, the modal split, lfilter).
+    """Outputs (m, N) of ``x' = A x + B u`` with ``u`` linear between samples.
+
+    From the equilibrium at ``u[0]``: first-order hold in ``digits``-digit decimal arithmetic,
+    stepped sample by sample. Exact to double precision and independent of what
+    :func:`simulate` uses (scipy's expm, the modal split, lfilter).
     """
     with decimal.localcontext() as context:
         context.prec = digits

@@ -39,6 +39,7 @@ def _nrmse(value: np.ndarray, reference: np.ndarray) -> float:
 
 
 def speed(method: str, pulsing_s: float) -> None:
+    """Print wall and CPU seconds per simulated second of each configuration (``method``)."""
     rig = load_rig(RIG)
     pressures = (1.38e6, 2.07e6, 2.76e6)
     excitation = seed_pulsing(pressures, pulsing_s=pulsing_s)
@@ -68,6 +69,7 @@ def speed(method: str, pulsing_s: float) -> None:
 
 
 def accuracy(method: str) -> None:
+    """Print each case's NRMSE per channel against a tight reference solve, per setting."""
     rig = load_rig(RIG)
     excitation = seed_pulsing((2.76e6,), pulsing_s=3.0)
     cases = [
@@ -105,6 +107,7 @@ def accuracy(method: str) -> None:
 
 
 def main() -> None:
+    """Parse the arguments, then run the speed and the accuracy benchmark."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--method", default=SOLVER_METHOD, choices=("BDF", "Radau", "LSODA"))
     parser.add_argument("--quick", action="store_true", help="6 s recordings instead of 18 s")

@@ -1,5 +1,7 @@
-"""Topic names, message types and fields, and the effect names, of the interface contract
-(interface.md)."""
+"""Topic names, message types and fields, and the effect names, of the interface contract.
+
+The contract is interface.md.
+"""
 
 from __future__ import annotations
 

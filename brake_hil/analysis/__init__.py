@@ -1,5 +1,8 @@
-"""Recordings as arrays and what the seed measures on them: signals and Table 4-5 metrics,
-characterisation (Table 3), compare, the comparator's stamp-paired scoring. ROS-free."""
+"""Recordings as arrays and what the seed measures on them. ROS-free.
+
+Signals and Table 4-5 metrics, characterisation (Table 3), compare, the comparator's
+stamp-paired scoring.
+"""
 
 from __future__ import annotations
 

@@ -145,21 +145,14 @@ def lowpass(
     The seed: "third-order zero-phase Butterworth low-pass filter with a cutoff frequency of
     30 Hz".
 
-    Parameters
-    ----------
-    signal
-        Samples, uniformly spaced (any unit; the output has the same unit).
-    sample_rate_hz
-        Sample rate (Hz).
-    cutoff_hz
-        Cut-off frequency of the Butterworth design (Hz), below the Nyquist frequency.
-    order
-        Order of the Butterworth design (applied twice).
+    Args:
+        signal: Samples, uniformly spaced (any unit; the output has the same unit).
+        sample_rate_hz: Sample rate (Hz).
+        cutoff_hz: Cut-off frequency of the Butterworth design (Hz), below the Nyquist frequency.
+        order: Order of the Butterworth design (applied twice).
 
-    Raises
-    ------
-    SignalError
-        NaN samples, a cut-off outside (0, Nyquist), or a signal too short to pad.
+    Raises:
+        SignalError: NaN samples, a cut-off outside (0, Nyquist), or a signal too short to pad.
     """
     return _zero_phase(signal, sample_rate_hz, cutoff_hz, "lowpass", order)
 
@@ -178,21 +171,16 @@ def bandpass(
     (eq. 1). A 2 Hz wide band rings for about a second: discard about 1 s at each end of the
     filtered signal (or analyse a steady segment well inside it).
 
-    Parameters
-    ----------
-    signal
-        Samples, uniformly spaced (any unit; the output has the same unit).
-    sample_rate_hz
-        Sample rate (Hz).
-    low_hz, high_hz
-        Band edges of the Butterworth design (Hz), ``0 < low_hz < high_hz < Nyquist``.
-    order
-        Order of the Butterworth prototype (the band-pass has twice as many poles).
+    Args:
+        signal: Samples, uniformly spaced (any unit; the output has the same unit).
+        sample_rate_hz: Sample rate (Hz).
+        low_hz: Lower band edge of the Butterworth design (Hz),
+            ``0 < low_hz < high_hz < Nyquist``.
+        high_hz: Upper band edge of the Butterworth design (Hz).
+        order: Order of the Butterworth prototype (the band-pass has twice as many poles).
 
-    Raises
-    ------
-    SignalError
-        NaN samples, band edges out of order or range, or a signal too short to pad.
+    Raises:
+        SignalError: NaN samples, band edges out of order or range, or a signal too short to pad.
     """
     return _zero_phase(signal, sample_rate_hz, (low_hz, high_hz), "bandpass", order)
 
@@ -219,29 +207,19 @@ def harmonic_energy_shares(
     otherwise. Shares are normalised to sum to 100 over the ``count`` harmonics, as in the
     seed (its 5-25 Hz columns sum to about 100 %).
 
-    Parameters
-    ----------
-    signal
-        Samples of a steady periodic segment, uniformly spaced (any unit).
-    sample_rate_hz
-        Sample rate (Hz).
-    fundamental_hz
-        Excitation frequency (Hz); the seed's is 5 Hz.
-    count
-        Number of harmonics (fundamental included); the seed uses 5 (5-25 Hz).
-    half_width_bins
-        Bins summed on each side of each harmonic's bin (0 reads the single bin).
+    Args:
+        signal: Samples of a steady periodic segment, uniformly spaced (any unit).
+        sample_rate_hz: Sample rate (Hz).
+        fundamental_hz: Excitation frequency (Hz); the seed's is 5 Hz.
+        count: Number of harmonics (fundamental included); the seed uses 5 (5-25 Hz).
+        half_width_bins: Bins summed on each side of each harmonic's bin (0 reads the single bin).
 
-    Returns
-    -------
-    FloatArray
+    Returns:
         ``count`` shares (%), fundamental first, summing to 100.
 
-    Raises
-    ------
-    SignalError
-        Fewer whole periods than needed to separate the harmonics, a harmonic above the
-        Nyquist frequency, or no energy at the harmonics.
+    Raises:
+        SignalError: Fewer whole periods than needed to separate the harmonics, a harmonic above
+            the Nyquist frequency, or no energy at the harmonics.
     """
     _check_positive(sample_rate_hz, "sample_rate_hz")
     _check_positive(fundamental_hz, "fundamental_hz")
@@ -308,10 +286,8 @@ def whole_cycles(
 ) -> tuple[float, float]:
     """Trim ``[start_s, end_s)`` (s) at its end to a whole number of periods ``period_s`` (s).
 
-    Raises
-    ------
-    SignalError
-        The interval is shorter than one period.
+    Raises:
+        SignalError: The interval is shorter than one period.
     """
     _check_positive(period_s, "period_s")
     cycles = math.floor((end_s - start_s) / period_s + 1e-9)
@@ -367,10 +343,8 @@ def per_cycle_peak_to_peak(
     insensitive to one disturbed cycle and, unlike :func:`peak_to_peak`, to a slow drift of
     the mean.
 
-    Raises
-    ------
-    SignalError
-        Mismatched lengths, NaN samples, or less than one whole cycle.
+    Raises:
+        SignalError: Mismatched lengths, NaN samples, or less than one whole cycle.
     """
     array, time = _as_same_length({"signal": signal, "time_s": time_s})
     time = _as_time(time)
@@ -489,20 +463,15 @@ def mean_crossing_offsets(
     of the measured signal"; for a prediction with a different mean that level can miss the
     prediction entirely.)
 
-    Parameters
-    ----------
-    predicted, measured
-        Samples on the common time base ``time_s`` (same unit as each other).
-    time_s
-        Sample times (s), strictly increasing.
-    period_s
-        Excitation period ``T`` (s); 0.2 s in the seed.
+    Args:
+        predicted: Samples on the common time base ``time_s`` (same unit as ``measured``).
+        measured: Samples on the common time base ``time_s`` (same unit as ``predicted``).
+        time_s: Sample times (s), strictly increasing.
+        period_s: Excitation period ``T`` (s); 0.2 s in the seed.
 
-    Raises
-    ------
-    SignalError
-        Mismatched lengths, NaN samples, less than one whole cycle, or no crossing of one
-        direction that pairs.
+    Raises:
+        SignalError: Mismatched lengths, NaN samples, less than one whole cycle, or no crossing of
+            one direction that pairs.
     """
     predicted_arr, measured_arr, time = _as_same_length(
         {"predicted": predicted, "measured": measured, "time_s": time_s}
@@ -526,10 +495,8 @@ def nrmse(predicted: npt.ArrayLike, measured: npt.ArrayLike) -> float:
     rather than the RMS of the measurement keeps the value meaningful for signals with a
     large mean (a bore pressure of 0.9 MPa mean pulsing by 0.6 MPa).
 
-    Raises
-    ------
-    SignalError
-        Mismatched lengths, NaN samples, or a measured signal with no range.
+    Raises:
+        SignalError: Mismatched lengths, NaN samples, or a measured signal with no range.
     """
     predicted_arr, measured_arr = _as_same_length({"predicted": predicted, "measured": measured})
     span = float(measured_arr.max() - measured_arr.min())
@@ -582,20 +549,15 @@ def cycle_metrics(
     (:func:`per_cycle_peak_to_peak`); the time offsets come from
     :func:`mean_crossing_offsets`; NRMSE from :func:`nrmse`.
 
-    Parameters
-    ----------
-    predicted, measured
-        Samples on the common time base ``time_s`` (same unit as each other).
-    time_s
-        Sample times (s), strictly increasing.
-    period_s
-        Excitation period ``T`` (s); 0.2 s in the seed.
+    Args:
+        predicted: Samples on the common time base ``time_s`` (same unit as ``measured``).
+        measured: Samples on the common time base ``time_s`` (same unit as ``predicted``).
+        time_s: Sample times (s), strictly increasing.
+        period_s: Excitation period ``T`` (s); 0.2 s in the seed.
 
-    Raises
-    ------
-    SignalError
-        Mismatched lengths, NaN samples, less than one whole cycle, a measurement without
-        oscillation, or no pairable mean crossings.
+    Raises:
+        SignalError: Mismatched lengths, NaN samples, less than one whole cycle, a measurement
+            without oscillation, or no pairable mean crossings.
     """
     predicted_arr, measured_arr, time = _as_same_length(
         {"predicted": predicted, "measured": measured, "time_s": time_s}
@@ -663,26 +625,18 @@ def steady_segments(
     still lasts ``min_duration_s`` and at least three periods. Segment starts fall on a
     sample; cut segments out with :func:`segment_slice`.
 
-    Parameters
-    ----------
-    time_s
-        Sample times (s), strictly increasing.
-    pressure
-        The pressure that carries the excitation (Pa), ``p_i`` or ``p_b``; raw or filtered.
-    sample_rate_hz
-        Sample rate (Hz), at least 60 Hz for the 30 Hz low-pass.
-    period_s
-        Excitation period ``T`` (s); 0.2 s in the seed.
-    settle_s
-        Transient dropped at the start of each segment (s).
-    min_duration_s
-        Shortest segment kept, after settling and trimming (s).
+    Args:
+        time_s: Sample times (s), strictly increasing.
+        pressure: The pressure that carries the excitation (Pa), ``p_i`` or ``p_b``; raw or
+            filtered.
+        sample_rate_hz: Sample rate (Hz), at least 60 Hz for the 30 Hz low-pass.
+        period_s: Excitation period ``T`` (s); 0.2 s in the seed.
+        settle_s: Transient dropped at the start of each segment (s).
+        min_duration_s: Shortest segment kept, after settling and trimming (s).
 
-    Raises
-    ------
-    SignalError
-        Bad input, a recording shorter than three periods, or no steady segment (the
-        message says which condition failed).
+    Raises:
+        SignalError: Bad input, a recording shorter than three periods, or no steady segment (the
+            message says which condition failed).
     """
     values, time = _as_same_length({"pressure": pressure, "time_s": time_s})
     time = _as_time(time)

@@ -1,6 +1,8 @@
-"""The comparator's scoring: predictions paired with measurements by stamp, the seed's Table 4-5
-metrics per cycle and window, OK/WARN/ERROR thresholds (shared by the ``comparator`` node and
-``brake-hil regress``)."""
+"""The comparator's scoring, shared by the ``comparator`` node and ``brake-hil regress``.
+
+Predictions paired with measurements by stamp, the seed's Table 4-5 metrics per cycle and
+window, OK/WARN/ERROR thresholds.
+"""
 
 from __future__ import annotations
 
@@ -152,8 +154,11 @@ def weighted_metrics(parts: Sequence[signals.ChannelMetrics]) -> dict[str, float
 def resample(
     stamps_ns: IntArray, start_ns: int, count: int, period_ns: int, *values: FloatArray
 ) -> tuple[FloatArray, list[FloatArray]]:
-    """Time (s from ``start_ns``) of ``count`` samples ``period_ns`` apart, and ``values``
-    (sampled at ``stamps_ns``) linearly interpolated there: exact where no pair is missing."""
+    """Time of ``count`` samples ``period_ns`` apart, and ``values`` interpolated there.
+
+    Time is in s from ``start_ns``; ``values`` (sampled at ``stamps_ns``) are linearly
+    interpolated: exact where no pair is missing.
+    """
     grid = np.arange(count, dtype=np.float64) * period_ns
     relative = (stamps_ns - start_ns).astype(np.float64)
     return grid / 1e9, [np.interp(grid, relative, series) for series in values]
@@ -177,8 +182,10 @@ def evaluate_cycle(
     min_steady_share: float = 0.8,
     min_paired_share: float = 0.95,
 ) -> WindowResult:
-    """Metrics of the cycle ending at ``cycle_end_ns`` and of the rolling window of
-    ``window_cycles`` cycles ending with it, for one channel's paired samples.
+    """Metrics of the cycle ending at ``cycle_end_ns`` and of its rolling window, one channel.
+
+    The window is the ``window_cycles`` cycles ending with that cycle, scored on one channel's
+    paired samples.
 
     One guard period on each side of the window is low-passed with it (30 Hz, zero phase)
     but not scored, against the filter's edge effects; ``window`` must hold samples up to one
@@ -235,8 +242,11 @@ def evaluate_cycle(
 
 
 def peak_stamp_ns(window: PairedWindow, period_s: float = signals.EXCITATION_PERIOD_S) -> int:
-    """Stamp (ns) of a maximum of the measured signal's fundamental (``1 / period_s``) in
-    ``window``: cycles that start there hold both mean crossings well inside them."""
+    """Stamp (ns) of a maximum of the measured signal's fundamental (``1 / period_s``).
+
+    The maximum lies in ``window``; cycles that start there hold both mean crossings well
+    inside them.
+    """
     stamps, _, measured = window
     time_s = (stamps - stamps[0]).astype(np.float64) / 1e9
     phasor = signals.harmonic_phasor(measured, time_s, 1.0 / period_s)

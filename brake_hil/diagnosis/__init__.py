@@ -1,5 +1,8 @@
-"""Finding the physics the LTI model left out: candidate models and their engine, the
-calibration, fitting, evidence, the verdict and the improved model's file. ROS-free."""
+"""Finding the physics the LTI model left out. ROS-free.
+
+Candidate models and their engine, the calibration, fitting, evidence, the verdict and the
+improved model's file.
+"""
 
 from __future__ import annotations
 

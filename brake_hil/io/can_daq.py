@@ -112,8 +112,10 @@ def crc8_sae_j1850(data: bytes | bytearray) -> int:
 
 
 def frame_crc(arbitration_id: int, data: bytes | bytearray) -> int:
-    """The rig's crc8 of a frame: over the id (2 little-endian bytes, 4 if extended)
-    followed by data bytes 0-6."""
+    """The rig's crc8 of a frame: over the id, then data bytes 0-6.
+
+    The id takes 2 little-endian bytes, 4 if extended.
+    """
     width = 2 if arbitration_id < 0x800 else 4
     return crc8_sae_j1850(arbitration_id.to_bytes(width, "little") + bytes(data[:_CRC_BYTE]))
 
@@ -585,7 +587,7 @@ class CanDaq:
 
 
 def slcan_line(frame: can.Message) -> bytes:
-    """The slcan (Lawicel) text of a classic data frame, ``tIIILDD..\\r`` (``T`` if extended)."""
+    r"""The slcan (Lawicel) text of a classic data frame, ``tIIILDD..\r`` (``T`` if extended)."""
     data = bytes(frame.data).hex().upper()
     if frame.is_extended_id:
         return f"T{frame.arbitration_id:08X}{len(frame.data)}{data}\r".encode()
@@ -593,11 +595,11 @@ def slcan_line(frame: can.Message) -> bytes:
 
 
 class SlcanPty:
-    """The device side of an slcan adapter on a pseudo-terminal pair (for an emulated rig).
+    r"""The device side of an slcan adapter on a pseudo-terminal pair (for an emulated rig).
 
     A reader in any process opens :attr:`device_path` (or ``link_path``, a symlink made to
     it) with python-can's ``slcan`` interface. Commands the reader sends (``O``, ``C``,
-    ``S8``, ...) are acknowledged with ``\\r``; frames are written without blocking, and
+    ``S8``, ...) are acknowledged with ``\r``; frames are written without blocking, and
     dropped (counted in :attr:`dropped`) while nobody reads, as on a bus without receivers.
 
     Args:

@@ -356,8 +356,10 @@ class McapRecorder:
     # -- writing -------------------------------------------------------------------------
 
     def write(self, handle: int, log_time_ns: int, data: bytes) -> None:
-        """Append one serialised message of topic ``handle``; ``log_time_ns`` is its log time
-        (ns since the epoch; also written as publish time)."""
+        """Append one serialised message of topic ``handle``.
+
+        ``log_time_ns`` is its log time (ns since the epoch; also written as publish time).
+        """
         current = self._file
         if current is None:
             raise ValueError(f"{self.path}: the recording is closed")

@@ -1,5 +1,7 @@
-"""Models that run live: what a live model is, and the model-file loaders (a rig YAML's LTI
-model, the diagnosis's improved model). ROS-free."""
+"""Models that run live: what a live model is, and the model-file loaders. ROS-free.
+
+The loaders read a rig YAML's LTI model and the diagnosis's improved model.
+"""
 
 from __future__ import annotations
 

@@ -1,5 +1,7 @@
-"""What a live model is: a per-sample stepper for the 1 kHz loop and a batch run of the same
-model (ROS-free)."""
+"""What a live model is (ROS-free).
+
+A per-sample stepper for the 1 kHz loop and a batch run of the same model.
+"""
 
 from __future__ import annotations
 

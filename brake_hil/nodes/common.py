@@ -197,14 +197,16 @@ class MessageBuilder:
         self._target = attrgetter(parent)(self._message) if parent else self._message
 
     def __call__(self, stamp: int, value: float) -> Any:
+        """The message stamped ``stamp`` (ns) with ``value``: the same object every call."""
         self._stamp.sec, self._stamp.nanosec = divmod(stamp, NS_PER_S)
         setattr(self._target, self._attribute, value)
         return self._message
 
 
 class RawMessageBuilder:
-    """Serialised (CDR, little endian) messages of one contract topic:
-    ``builder(stamp_ns, value) -> bytes``, for ``publisher.publish(bytes)``.
+    """Serialised messages of one contract topic: ``builder(stamp_ns, value) -> bytes``.
+
+    CDR, little endian, for ``publisher.publish(bytes)``.
 
     The layout of :mod:`brake_hil.io.stamped_cdr` (a header, then float64 fields, the topic's
     field set and the others 0): what rclpy's ``serialize_message`` gives, padding bytes
@@ -224,6 +226,7 @@ class RawMessageBuilder:
         self._value = struct.Struct("<d")
 
     def __call__(self, stamp: int, value: float) -> bytes:
+        """The serialised message stamped ``stamp`` (ns) with ``value``."""
         sec, nanosec = divmod(stamp, NS_PER_S)
         self._stamp.pack_into(self._template, 4, sec, nanosec)
         self._value.pack_into(self._template, self._value_offset, value)
@@ -231,8 +234,11 @@ class RawMessageBuilder:
 
 
 def wait_for_acks(publishers: Iterable[Any], timeout_s: float = 1.0) -> bool:
-    """Wait until every reliable subscriber has acknowledged what ``publishers`` sent (before
-    the node is destroyed: samples still in flight would be lost). True when all were."""
+    """Wait until every reliable subscriber has acknowledged what ``publishers`` sent.
+
+    Call it before the node is destroyed: samples still in flight would be lost. True when all
+    were.
+    """
     from rclpy.duration import Duration
 
     deadline = time.monotonic() + timeout_s
@@ -244,8 +250,9 @@ def wait_for_acks(publishers: Iterable[Any], timeout_s: float = 1.0) -> bool:
 
 
 def declare_settings(node: Node, settings: type[SettingsT]) -> SettingsT:
-    """Declare every field of a settings dataclass as a read-only ROS parameter; return the
-    dataclass filled with the parameters' values.
+    """Declare every field of a settings dataclass as a read-only ROS parameter.
+
+    Returns the dataclass filled with the parameters' values.
 
     Each parameter gets the field's default (a ``package_file`` default as that file of
     :func:`config_path`) and its description and unit in the ``ParameterDescriptor``
@@ -319,9 +326,12 @@ def status_values(status: DiagnosticStatus) -> dict[str, str]:
 
 
 def make_executor(context: Context | None = None) -> Executor:
-    """rclpy's EventsExecutor (callbacks dispatched from C++: about half the cost a message of
-    the default executor, which matters at several kHz on 2 cores); ``BRAKE_HIL_EXECUTOR=single``
-    or an rclpy without it gives the SingleThreadedExecutor."""
+    """The EventsExecutor of rclpy, or the SingleThreadedExecutor when asked or missing.
+
+    The EventsExecutor dispatches callbacks from C++: about half the cost a message of the
+    default executor, which matters at several kHz on 2 cores. ``BRAKE_HIL_EXECUTOR=single``
+    or an rclpy without it gives the SingleThreadedExecutor.
+    """
     if os.environ.get("BRAKE_HIL_EXECUTOR", "events") != "single":
         try:
             from rclpy.experimental import EventsExecutor
@@ -333,8 +343,9 @@ def make_executor(context: Context | None = None) -> Executor:
 
 
 def spin_until_signal(node: Node, stop: threading.Event | None = None) -> bool:
-    """Run ``node``'s callbacks on a background executor until SIGINT or SIGTERM (or
-    ``stop`` is set, or the context shuts down); then stop the executor.
+    """Run ``node``'s callbacks on a background executor until SIGINT or SIGTERM.
+
+    Also until ``stop`` is set, or the context shuts down; then stop the executor.
 
     Returns False when a callback raised (the executor stops at the first exception, which is
     logged), True otherwise: ``main`` turns False into exit status 1.
@@ -367,8 +378,10 @@ def spin_until_signal(node: Node, stop: threading.Event | None = None) -> bool:
 
 
 def wait_for_signal(finished: Callable[[], bool] = lambda: False) -> None:
-    """Block until SIGINT or SIGTERM, or until ``finished()`` (polled every 0.1 s): for a node
-    whose own thread does all its work, with no executor to spin."""
+    """Block until SIGINT or SIGTERM, or until ``finished()`` (polled every 0.1 s).
+
+    For a node whose own thread does all its work, with no executor to spin.
+    """
     stop = threading.Event()
 
     def on_signal(signum: int, frame: object) -> None:
@@ -440,8 +453,11 @@ def write_summary(path: str, summary: object) -> None:
 
 
 class LoopNode(Node):
-    """A node whose work runs on a loop thread of its own (``self._loop``, with ``running``
-    and ``error``): what :func:`run_until_stopped` waits on and reports."""
+    """A node whose work runs on a loop thread of its own.
+
+    The loop is ``self._loop``, with ``running`` and ``error``: what
+    :func:`run_until_stopped` waits on and reports.
+    """
 
     _loop: Any
     loop_name = "loop"
@@ -463,7 +479,9 @@ class LoopNode(Node):
 
 
 def run_until_stopped(node: Any) -> bool:
-    """``run`` of :func:`run_node` for nodes that work on their own thread: wait for a
-    signal or the node's end; healthy unless its loop failed."""
+    """``run`` of :func:`run_node` for nodes that work on their own thread.
+
+    Wait for a signal or the node's end; healthy unless its loop failed.
+    """
     wait_for_signal(lambda: not node.running)
     return node.loop_error is None

@@ -141,8 +141,11 @@ class ComparatorNode(common.LoopNode):
             self._publish(self._statuses(windows, None)[0])
 
     def _align(self, window: PairedWindow) -> None:
-        """Once: move the cycle grid (by under half a period) so cycles start at a peak of
-        the measured bore pressure, which puts both mean crossings well inside each cycle."""
+        """Once: move the cycle grid so cycles start at a peak of the measured bore pressure.
+
+        The grid moves by under half a period; starting at a peak puts both mean crossings
+        well inside each cycle.
+        """
         assert self._next_cycle_end is not None
         span = (self._window_cycles + 2) * self._period_ns
         keep = window.stamps_ns > window.stamps_ns[-1] - span

@@ -146,8 +146,11 @@ class RecorderNode(Node):
         self.get_logger().info(f"recording {name} ({msgtype})")
 
     def drain(self, quiet_s: float = 0.05, timeout_s: float = 0.5) -> None:
-        """Record what the middleware still holds: spin until nothing arrives for ``quiet_s``
-        (at most ``timeout_s``). Called after a stop signal, before :meth:`close`."""
+        """Record what the middleware still holds.
+
+        Spin until nothing arrives for ``quiet_s`` (at most ``timeout_s``). Called after a stop
+        signal, before :meth:`close`.
+        """
         executor = common.make_executor()
         executor.add_node(self)
         deadline = time.monotonic() + timeout_s

@@ -80,8 +80,9 @@ def precompute_run(
     schedule: PulsingSchedule = DEFAULT_SCHEDULE,
     seed: int = 0,
 ) -> EmulatedRun:
-    """The run to play: the seed's ramp-then-pulse input (Pa, ``schedule``) through a
-    simulator, measured by the DAQ (noise, 16-bit quantisation,
+    """The run to play: the seed's ramp-then-pulse input through a simulator, as measured.
+
+    The input is in Pa (``schedule``); the DAQ measures the run (noise, 16-bit quantisation,
     :mod:`brake_hil.physics.measurement`).
 
     ``simulator``: ``virtual_rig`` (:func:`brake_hil.virtual_rig.simulate_rig`, with
@@ -221,8 +222,10 @@ class RigEmulatorNode(Node):
         self._wait_timer = self.create_timer(0.05, self._start_when_subscribed)
 
     def _start_when_subscribed(self) -> None:
-        """Start playing once every topic has ``wait_for_subscribers`` readers (or at the
-        timeout), ``start_delay_s`` later."""
+        """Start playing ``start_delay_s`` after every topic has ``wait_for_subscribers`` readers.
+
+        Or ``start_delay_s`` after the timeout.
+        """
         wait_for = self.settings.wait_for_subscribers
         ready = all(p.get_subscription_count() >= wait_for for p, _ in self._outputs)
         waited = time.monotonic() - self._waiting_since

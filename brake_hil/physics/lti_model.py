@@ -158,8 +158,10 @@ class DiscreteModel:
 
 
 def discretize(system: StateSpace, sample_time: float = SAMPLE_TIME) -> DiscreteModel:
-    """First-order-hold discretisation by one matrix exponential (exact for piecewise-linear
-    input). States are scaled to order one first so the stiff system stays well conditioned.
+    """First-order-hold discretisation by one matrix exponential.
+
+    Exact for piecewise-linear input. States are scaled to order one first so the stiff system
+    stays well conditioned.
     """
     scale = system.state_scale
     A = system.state_matrix * scale[np.newaxis, :] / scale[:, np.newaxis]

@@ -1,5 +1,7 @@
-"""Stepping the model once per input sample that arrived (:class:`CatchUpRunner`); replay
-pacing by stamps."""
+"""Stepping the model once per input sample that arrived; replay pacing by stamps.
+
+The stepping is :class:`CatchUpRunner`.
+"""
 
 from __future__ import annotations
 
@@ -199,8 +201,10 @@ class StampMode(Enum):
 
 
 def replay_deadlines(stamps_ns: IntArray, start_ns: int, rate: float) -> IntArray:
-    """Publication times (ns, monotonic) of samples stamped ``stamps_ns``, the first at
-    ``start_ns``, at ``rate`` times real time (2.0 plays twice as fast)."""
+    """Publication times (ns, monotonic) of samples stamped ``stamps_ns``.
+
+    The first at ``start_ns``, at ``rate`` times real time (2.0 plays twice as fast).
+    """
     if not (math.isfinite(rate) and rate > 0.0):
         raise ValueError(f"rate must be a positive number, got {rate}")
     relative = (stamps_ns - stamps_ns[0]).astype(np.float64) / rate
@@ -209,8 +213,11 @@ def replay_deadlines(stamps_ns: IntArray, start_ns: int, rate: float) -> IntArra
 
 
 def loop_span_ns(stamps_ns: IntArray) -> int:
-    """Stamp offset (ns) of each further pass of a looped replay: the recording's span plus
-    one median sample interval, so stamps keep increasing by one interval across the seam."""
+    """Stamp offset (ns) of each further pass of a looped replay.
+
+    The recording's span plus one median sample interval, so stamps keep increasing by one
+    interval across the seam.
+    """
     if stamps_ns.size < 2:
         raise ValueError("a replay needs at least 2 samples")
     interval = int(np.median(np.diff(stamps_ns)))

@@ -1,5 +1,7 @@
-"""The 1 kHz loop on absolute deadlines: sleeping, SCHED_FIFO, :class:`DeadlineLoop` and
-:class:`PhaseLock`."""
+"""The 1 kHz loop on absolute deadlines.
+
+Sleeping, SCHED_FIFO, :class:`DeadlineLoop` and :class:`PhaseLock`.
+"""
 
 from __future__ import annotations
 
@@ -89,8 +91,9 @@ def set_realtime_priority(priority: int, thread_id: int = 0) -> bool:
 
 
 def set_process_realtime_priority(priority: int) -> int:
-    """``SCHED_FIFO`` at ``priority`` for every thread of this process that exists now (the
-    middleware's receive threads included; Linux ``/proc/self/task``), and so for the
+    """``SCHED_FIFO`` at ``priority`` for every thread of this process that exists now.
+
+    The middleware's receive threads included (Linux ``/proc/self/task``), and so for the
     threads they start later. Returns how many threads were changed.
 
     A real-time loop thread should then run one step higher, so that nothing else in the

@@ -120,8 +120,10 @@ class TruthLaw:
         return tuple(0.0 for _ in self.states())
 
     def drift_factors(self, time: Signal) -> tuple[Signal, Signal, Signal]:
-        """Factors (-) on the fluid viscosity, the seal modulus and the linearised valve
-        resistance at ``time`` (s from the start)."""
+        """Drift factors (-) at ``time`` (s from the start).
+
+        Factors on the fluid viscosity, the seal modulus and the linearised valve resistance.
+        """
         del time
         return 1.0, 1.0, 1.0
 
@@ -186,15 +188,18 @@ class TruthLaw:
         return rate, [], flow, 0.0
 
     def seal_asymmetry(self) -> float:
-        """Apply/release asymmetry ``a`` (-) of the seal, for a frictional seal law's slip
-        threshold (``(1 - a)`` on apply, ``(1 + a)`` on release)."""
+        """Apply/release asymmetry ``a`` (-) of the seal.
+
+        For a frictional seal law's slip threshold: ``(1 - a)`` on apply, ``(1 + a)`` on release.
+        """
         return 0.0
 
     def spring_deflection(
         self, seal_displacement: Signal, states: Sequence[Signal]
     ) -> tuple[Signal, list[Signal]]:
-        """Effective deflection (m) of the seals' equivalent spring ``k_eh`` at the seal
-        displacement ``x_p - x_c`` (m), and the own states' rates.
+        """Effective deflection (m) of the equivalent spring ``k_eh``, and the own states' rates.
+
+        The seals' spring, at the seal displacement ``x_p - x_c`` (m).
 
         The host applies it only while the spring carries part of the seal force
         (:meth:`spring_share` of the seal-force law below 1).
@@ -203,8 +208,10 @@ class TruthLaw:
         return seal_displacement, []
 
     def spring_share(self) -> float:
-        """Share (-) of the seal force the equivalent spring and damper still carry under
-        this law's :meth:`seal_force`."""
+        """Share (-) of the seal force the equivalent spring and damper still carry.
+
+        Under this law's :meth:`seal_force`.
+        """
         return 1.0
 
     def seal_force(
@@ -216,9 +223,10 @@ class TruthLaw:
         viscosity_factor: Signal,
         states: Sequence[Signal],
     ) -> tuple[Signal, list[Signal]]:
-        """The seals' force on the piston (N), made of the equivalent spring and damper's
-        ``spring_force`` (N), at the seal velocity ``x_p' - x_c'`` (m/s), and the own states'
-        rates.
+        """The seals' force on the piston (N), and the own states' rates.
+
+        Made of the equivalent spring and damper's ``spring_force`` (N), at the seal velocity
+        ``x_p' - x_c'`` (m/s).
 
         Args:
             spring_force: ``E(t) (k_eh x_eff + c_eh v)`` (N), eqs. 21e-f.
@@ -242,8 +250,11 @@ class TruthLaw:
         caliper_displacement: Signal,
         states: Sequence[Signal],
     ) -> tuple[Signal, list[Signal]]:
-        """Force (N) between bore and piston, opposing the seal velocity ``x_p' - x_c'``
-        (m/s) on the piston and acting on the caliper, and the own states' rates."""
+        """Force (N) between bore and piston, and the own states' rates.
+
+        The force opposes the seal velocity ``x_p' - x_c'`` (m/s) on the piston and acts on the
+        caliper.
+        """
         del velocity, caliper_displacement, states
         return 0.0 * bore_pressure, []
 
@@ -253,8 +264,11 @@ class TruthLaw:
         return 1.0
 
     def acquisition(self, channel: str, time: FloatArray, values: FloatArray) -> FloatArray:
-        """Channel ``channel`` (``p_i``, ``p_b``, ``F_k``, ``x_c``, ``p_a``) as its sensor and
-        DAQ pass it on, before noise and quantisation; ``values`` sampled at ``time`` (s)."""
+        """Channel ``channel`` as its sensor and DAQ pass it on, before noise and quantisation.
+
+        ``channel`` is one of ``p_i``, ``p_b``, ``F_k``, ``x_c``, ``p_a``; ``values`` sampled at
+        ``time`` (s).
+        """
         del channel, time
         return values
 

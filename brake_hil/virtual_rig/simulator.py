@@ -172,8 +172,10 @@ def operating_pressure_schedule(
 
 
 class _Sampled:
-    """A signal sampled on a uniform grid, read between samples linearly (a first-order hold,
-    as the LTI model's discretisation reads its input) or by a cubic spline."""
+    """A signal sampled on a uniform grid, read between samples linearly or by a cubic spline.
+
+    Linear reading is a first-order hold, as the LTI model's discretisation reads its input.
+    """
 
     def __init__(self, time: FloatArray, values: FloatArray, *, cubic: bool = False) -> None:
         self.time = time
@@ -244,8 +246,10 @@ class _Ports:
         self.internals = hooked(laws, "internals")
 
     def stateful(self) -> tuple[list[TruthLaw], list[TruthLaw]]:
-        """The laws whose own states the plant integrates, in layout order: the line's
-        (before ``p_b``) and the seal's and piston-bore forces' (after ``x_c'``)."""
+        """The laws whose own states the plant integrates, in layout order.
+
+        The line's (before ``p_b``) and the seal's and piston-bore forces' (after ``x_c'``).
+        """
         line = [self.line] if self.line is not None else []
         seal = [law for law in (self.seal, self.spring) if law is not None]
         structure = [*seal, *self.bore_forces]
@@ -326,8 +330,9 @@ class _Dynamics:
     def evaluate(
         self, t: Signal, x: Sequence[Signal], *, outputs: bool = False
     ) -> tuple[list[Signal], dict[str, Signal]]:
-        """Derivatives (SI, one per state) and, with ``outputs``, the auxiliary signals at time
-        ``t`` (s) (an empty mapping without).
+        """Derivatives (SI, one per state) and, with ``outputs``, the auxiliary signals.
+
+        At time ``t`` (s); without ``outputs`` the auxiliary signals are an empty mapping.
 
         ``x`` holds the SI states, each a float (and ``t`` a float) or each an array of one
         length (and ``t`` a float or an array of that length).
@@ -531,8 +536,10 @@ def acquire(
     laws: Sequence[TruthLaw] = (),
     seed: int = 0,
 ) -> dict[str, FloatArray]:
-    """The DAQ: each law's acquisition hook on every channel, in the laws' order (a delayed
-    channel, a transducer's gain), then noise and quantisation (16 bits, seed's ranges).
+    """The DAQ: each law's acquisition hook on every channel, then noise and quantisation.
+
+    The hooks run in the laws' order (a delayed channel, a transducer's gain); quantisation is
+    16 bits over the seed's ranges.
 
     Channels are drawn in the order ``p_i``, ``p_b``, ``F_k``, ``x_c``, ``p_a`` from one
     generator seeded with ``seed``, so a law on one channel leaves the others' noise unchanged.

@@ -136,9 +136,11 @@ class Candidate:
         return True
 
     def plausible(self, theta: FloatArray) -> bool:
-        """Whether fitted parameters ``theta`` (this candidate's own) describe this physics
-        rather than a stand-in for something else (e.g. a common delay of every output is a
-        dynamics error, not an acquisition skew)."""
+        """Whether fitted parameters ``theta`` (this candidate's own) describe this physics.
+
+        False when they are a stand-in for something else (e.g. a common delay of every
+        output is a dynamics error, not an acquisition skew).
+        """
         return True
 
     def start(self, context: Context) -> FloatArray:

@@ -31,8 +31,10 @@ class BoreFriction(Candidate):
     parameters = (CandidateParameter("bore_friction_coefficient", "-", 0.0, 3.0, 0.2),)
 
     def fill(self, draft: Draft, theta: FloatArray, context: Context) -> None:
-        """A slider whose threshold is mu 4 A_eb p_b |x_c| / l_c (on the seal's slider, if
-        there is one)."""
+        """A slider whose threshold is mu 4 A_eb p_b |x_c| / l_c.
+
+        It acts on the seal's slider, if there is one.
+        """
         bore_area = np.array([p.bore_area for p in draft.params])
         draft.add(
             FrictionElement(

@@ -21,8 +21,11 @@ APPLY, RELEASE = 0, 1
 
 @dataclass(frozen=True, eq=False)
 class BilinearSeal(Term):
-    """The seal's spring ``(1 - a) k_eh`` on the apply side of a creeping relaxed position,
-    ``(1 + a) k_eh`` on the release side."""
+    """The seal's spring, asymmetric about a creeping relaxed position.
+
+    ``(1 - a) k_eh`` on the apply side of the relaxed position, ``(1 + a) k_eh`` on the
+    release side.
+    """
 
     asymmetry: FloatArray  # -, a
     relaxation_time: FloatArray  # s, creep of the relaxed position

@@ -38,9 +38,11 @@ class SensorDelay(Candidate):
         draft.add(ChannelDelay(theta[:, :3].copy()))
 
     def plausible(self, theta: FloatArray) -> bool:
-        """Skew: one output lags the others by over half a millisecond, or every output
-        leads alike (the input ``p_i`` acquired late). A common lag of every output is the
-        model's own phase error, not acquisition skew."""
+        """Skew: one output lags the others by over 0.5 ms, or every output leads alike.
+
+        Every output leading alike is the input ``p_i`` acquired late. A common lag of every
+        output is the model's own phase error, not acquisition skew.
+        """
         delays = np.asarray(theta[:3], dtype=float)
         spread = float(np.max(np.abs(delays - np.median(delays))))
         return spread > SKEW_THRESHOLD or float(np.max(delays)) < -SKEW_THRESHOLD

@@ -1,5 +1,7 @@
-"""The candidate models run over a recording (:func:`simulate_batch`) or sample by sample
-(:class:`Integrator`), for a batch of parameter sets at once."""
+"""The candidate models run for a batch of parameter sets at once.
+
+Over a recording (:func:`simulate_batch`) or sample by sample (:class:`Integrator`).
+"""
 
 from __future__ import annotations
 
@@ -220,11 +222,12 @@ def simulate_batch(
     start_time: float = 0.0,
     pressure_ceiling: float | None = None,
 ) -> FloatArray:
-    """Outputs ``(B, 3, N)`` (p_b Pa, F_k N, x_c m) of every parameter set of ``spec``
-    driven by ``pressure`` (Pa, one sample per ``sample_time`` s), from the equilibrium at
-    the first sample with every slider relaxed. ``start_time`` (s) is the first sample's time
-    in the recording (time-scheduled terms run on recording time); the pressure schedule
-    spans 0 to ``pressure_ceiling`` (Pa; default 1.2 times the input's maximum).
+    """Outputs ``(B, 3, N)`` (p_b Pa, F_k N, x_c m) of every parameter set of ``spec``.
+
+    Driven by ``pressure`` (Pa, one sample per ``sample_time`` s), from the equilibrium at the
+    first sample with every slider relaxed. ``start_time`` (s) is the first sample's time in
+    the recording (time-scheduled terms run on recording time); the pressure schedule spans 0
+    to ``pressure_ceiling`` (Pa; default 1.2 times the input's maximum).
     """
     u = np.asarray(pressure, dtype=float)
     if spec.is_linear:

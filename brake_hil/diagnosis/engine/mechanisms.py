@@ -1,5 +1,8 @@
-"""The engine's own mechanisms that more than a single law needs: a switching friction element
-between piston and caliper, and a per-channel delay of the outputs."""
+"""The engine's own mechanisms that more than a single law needs.
+
+A switching friction element between piston and caliper, and a per-channel delay of the
+outputs.
+"""
 
 from __future__ import annotations
 

@@ -1,5 +1,8 @@
-"""The linear plant of eq. 21c-f as the terms leave it at one schedule entry, and its exact
-discretisation (first-order hold on ``p_i``, zero-order hold on the explicit inputs)."""
+"""The linear plant of eq. 21c-f at one schedule entry, and its exact discretisation.
+
+The plant as the terms leave it at that entry; the discretisation with first-order hold on
+``p_i``, zero-order hold on the explicit inputs.
+"""
 
 from __future__ import annotations
 

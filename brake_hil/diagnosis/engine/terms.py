@@ -54,8 +54,10 @@ class State(Protocol):
         ...
 
     def value(self, name: str) -> FloatArray:
-        """One state of the plant: ``Q_h``, ``p_b``, ``x_p``, ``v_p``, ``x_c``, ``v_c``
-        (``Q_p``, ``p_h`` with a hose node)."""
+        """One state of the plant: ``Q_h``, ``p_b``, ``x_p``, ``v_p``, ``x_c``, ``v_c``.
+
+        With a hose node also ``Q_p``, ``p_h``.
+        """
         ...
 
     def seal(self) -> FloatArray:
@@ -123,8 +125,11 @@ class Term:
 
 @dataclass(frozen=True)
 class ModelSpec:
-    """One candidate model for a batch of ``B`` parameter sets: the calibrated LTI
-    coefficients of each set and the terms added to them (none: the LTI model)."""
+    """One candidate model for a batch of ``B`` parameter sets.
+
+    The calibrated LTI coefficients of each set and the terms added to them (none: the LTI
+    model).
+    """
 
     params: tuple[ModelParameters, ...]
     terms: tuple[Term, ...] = ()

@@ -4,9 +4,9 @@ An effect is a frozen dataclass: a ``strength`` (dimensionless, 0 = the LTI rig,
 and its own physical parameters, each declared once with unit and bounds in ``parameters``.
 It points to its entry of the effect catalogue (:mod:`brake_hil.physics.catalogue`), which
 gives its ``name`` and ``signature`` (how it shows in a recording). The class docstring's
-first paragraph is the physical description of the truth law with its source;
-``diagnosis_model`` says which simpler law a diagnosis should fit and where the truth law is
-richer.
+summary line and the paragraph after it are the physical description of the truth law with
+its source; ``diagnosis_model`` says which simpler law a diagnosis should fit and where the
+truth law is richer.
 
 The host calls :meth:`Effect.install` once per run: the effect binds its law
 (:class:`~brake_hil.virtual_rig.laws.TruthLaw`, the hooks of the host's ports it acts on) to
@@ -104,9 +104,9 @@ class Effect(ABC):
 
     @classmethod
     def description(cls) -> str:
-        """The physical description: the first paragraph of the class docstring."""
+        """The physical description: the class docstring's summary and next paragraph, one line."""
         doc = (cls.__doc__ or "").strip()
-        return " ".join(doc.split("\n\n")[0].split())
+        return " ".join(" ".join(doc.split("\n\n")[:2]).split())
 
     def describe(self) -> str:
         """Description, signature, what a diagnosis fits, and the parameter values."""

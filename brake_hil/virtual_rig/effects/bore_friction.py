@@ -86,15 +86,16 @@ class DahlBoreFriction(TruthLaw):
 
 @dataclass(frozen=True)
 class BoreFriction(Effect):
-    """Piston-bore friction from caliper cocking: under load the cut caliper tilts, the piston
-    bears on its bore at two edges and Coulomb friction opposes the piston's slide relative to
-    the bore, a force proportional to ``p_b x_c`` (seed eqs. 8-9,
-    ``F_fb = 4 mu_fb A_eb p_b x_c / l_c``). It dissipates energy per cycle and so adds damping
-    (``c_fb``). The simulator takes the contact force over the piston's guide length ``l_g``
-    (the couple's real arm) instead of the transducer distance ``l_c``, uses Dahl's
-    pre-sliding law (``w' = (v - |v| w mu_s / mu(v)) / delta``, ``F = mu_s N w``; Dahl, "A
-    solid friction model", Aerospace Corp. TOR-0158(3107-18)-1, 1968) with a Stribeck
-    coefficient ``mu(v) = mu_k + (mu_s - mu_k) exp(-(v / v_S)^2)`` inside it (as in LuGre),
+    """Piston-bore friction from caliper cocking.
+
+    Under load the cut caliper tilts, the piston bears on its bore at two edges and Coulomb
+    friction opposes the piston's slide relative to the bore, a force proportional to ``p_b x_c``
+    (seed eqs. 8-9, ``F_fb = 4 mu_fb A_eb p_b x_c / l_c``). It dissipates energy per cycle and so
+    adds damping (``c_fb``). The simulator takes the contact force over the piston's guide length
+    ``l_g`` (the couple's real arm) instead of the transducer distance ``l_c``, uses Dahl's
+    pre-sliding law (``w' = (v - |v| w mu_s / mu(v)) / delta``, ``F = mu_s N w``; Dahl, "A solid
+    friction model", Aerospace Corp. TOR-0158(3107-18)-1, 1968) with a Stribeck coefficient
+    ``mu(v) = mu_k + (mu_s - mu_k) exp(-(v / v_S)^2)`` inside it (as in LuGre),
     ``mu_s = strength mu_fb``.
     Source: seed eqs. 8-9; Dahl (1968).
     """

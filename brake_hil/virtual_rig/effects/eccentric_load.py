@@ -12,8 +12,10 @@ from brake_hil.virtual_rig.laws import LtiPlant, Signal, TruthLaw
 
 @dataclass(frozen=True)
 class LoadDependentShare(TruthLaw):
-    """Share of ``A_eb p_b`` that reaches the caliper, as a function of that force: the
-    host's caliper-share port."""
+    """Share of ``A_eb p_b`` that reaches the caliper, as a function of that force.
+
+    The host's caliper-share port.
+    """
 
     unloaded_change: float  # -, share - 1 at zero force
     loaded_change: float  # -, share - 1 at large force
@@ -34,16 +36,18 @@ class LoadDependentShare(TruthLaw):
 
 @dataclass(frozen=True)
 class EccentricLoad(Effect):
-    """Eccentric loading of the cut caliper: with washers under its mounting the caliper's
-    pressure force and the support reaction no longer act along one line, and summing moments
-    about the support point (seed eqs. 22a-c, ``F_c / F_p`` set by the moment arms
-    ``b_k``, ``b_b``, ``b_p``, ``d_b``, ``b_c`` and the washer stack ``(a - 1) w_w``) gives the
-    caliper a different share of the pressure force than ``A_eb p_b``: less with five washers,
-    which is why the seed over-predicts ``x_c`` by 7-39 % (Table 5), most at the lowest
-    pressure. The simulator lets the share seat with load, as the contact of the washer stack
-    and supports closes: ``F_c = A_eb p_b (1 + d_1 + (d_0 - d_1) F_0 / (F_0 + A_eb p_b))``,
-    ``d_0`` unloaded and ``d_1`` fully seated, scaled by ``strength``. Only the caliper's
-    equation (21f) changes; the piston's (21e) keeps ``A_ep p_b``.
+    """Eccentric loading of the cut caliper.
+
+    With washers under its mounting the caliper's pressure force and the support reaction no longer
+    act along one line, and summing moments about the support point (seed eqs. 22a-c, ``F_c / F_p``
+    set by the moment arms ``b_k``, ``b_b``, ``b_p``, ``d_b``, ``b_c`` and the washer stack
+    ``(a - 1) w_w``) gives the caliper a different share of the pressure force than ``A_eb p_b``:
+    less with five washers, which is why the seed over-predicts ``x_c`` by 7-39 % (Table 5), most
+    at the lowest pressure. The simulator lets the share seat with load, as the contact of the
+    washer stack and supports closes:
+    ``F_c = A_eb p_b (1 + d_1 + (d_0 - d_1) F_0 / (F_0 + A_eb p_b))``, ``d_0`` unloaded and ``d_1``
+    fully seated, scaled by ``strength``. Only the caliper's equation (21f) changes; the piston's
+    (21e) keeps ``A_ep p_b``.
     Source: seed eq. 22 and Table 5.
     """
 

@@ -15,8 +15,10 @@ ATMOSPHERIC_PRESSURE = 101_325.0
 
 @dataclass(frozen=True)
 class PolytropicAir(TruthLaw):
-    """Free air bound to a strength: compliance per unit fluid volume (1/Pa), the host's
-    specific-compliance port (every chamber and line node)."""
+    """Free air bound to a strength: compliance per unit fluid volume (1/Pa).
+
+    The host's specific-compliance port (every chamber and line node).
+    """
 
     free_air_fraction: float  # alpha_0, -, free-gas volume share at atmospheric pressure
     polytropic_index: float  # n, -
@@ -41,16 +43,17 @@ class PolytropicAir(TruthLaw):
 
 @dataclass(frozen=True)
 class EntrainedAir(Effect):
-    """Entrained air: undissolved air bubbles in the brake fluid make the effective bulk
-    modulus of eq. 18 rise steeply with pressure, so the bore chamber (and the master cylinder
-    and line) are soft at low pressure and stiff at high pressure. The simulator adds to the
-    rig's own compliance a free-gas volume ``alpha_0 (p_0 / p)^(1/n) h(p) V`` compressed
-    polytropically (index ``n`` between isothermal 1 and adiabatic 1.4) and partly dissolving
-    by Henry's law (``h = 1 / (1 + (p - p_0) / p_d)``), with ``p`` absolute; its compliance
-    is ``-dV_air / dp`` at the instantaneous pressure of each chamber.
-    Source: seed eq. 18 (isothermal air at the mean pressure); Merritt, Hydraulic Control
-    Systems (Wiley 1967), ch. 2; Gholizadeh, Burton, Schoenau, "Fluid bulk modulus: a
-    literature survey", Int. J. Fluid Power 12(3), 2011.
+    """Entrained air: undissolved air bubbles in the brake fluid.
+
+    They make the effective bulk modulus of eq. 18 rise steeply with pressure, so the bore chamber
+    (and the master cylinder and line) are soft at low pressure and stiff at high pressure. The
+    simulator adds to the rig's own compliance a free-gas volume ``alpha_0 (p_0 / p)^(1/n) h(p) V``
+    compressed polytropically (index ``n`` between isothermal 1 and adiabatic 1.4) and partly
+    dissolving by Henry's law (``h = 1 / (1 + (p - p_0) / p_d)``), with ``p`` absolute; its
+    compliance is ``-dV_air / dp`` at the instantaneous pressure of each chamber.
+    Source: seed eq. 18 (isothermal air at the mean pressure); Merritt, Hydraulic Control Systems
+    (Wiley 1967), ch. 2; Gholizadeh, Burton, Schoenau, "Fluid bulk modulus: a literature survey",
+    Int. J. Fluid Power 12(3), 2011.
     """
 
     strength: float = 1.0

@@ -15,12 +15,13 @@ from brake_hil.virtual_rig.laws import LineFlow, LtiPlant, Signal, State, TruthL
 
 @dataclass(frozen=True)
 class HoseLadder(TruthLaw):
-    """The line as an RC ladder: pipe and valve, then ``N`` hose segments, bound to a rig (the
-    host's line port, the node pressures its states).
+    """The line as an RC ladder: pipe and valve, then ``N`` hose segments, bound to a rig.
 
-    Node ``j`` (``0 .. N-1``) sits before hose segment ``j + 1`` (resistance ``R_t / N``);
-    node 0 is the valve outlet and carries the hard pipe's compliance. The bore end of the
-    last segment carries ``bore_end_*``. Compliances are
+    The host's line port, the node pressures its states.
+
+    Node ``j`` (``0 .. N-1``) sits before hose segment ``j + 1`` (resistance ``R_t / N``); node 0
+    is the valve outlet and carries the hard pipe's compliance. The bore end of the last segment
+    carries ``bore_end_*``. Compliances are
     ``share * (volume * fluid compliance + wall compliance)``.
     """
 
@@ -88,17 +89,18 @@ class HoseLadder(TruthLaw):
 
 @dataclass(frozen=True)
 class HoseCompliance(Effect):
-    """Hose and pipe compliance: the seed's flow equation (21c) moves fluid from the master
-    cylinder to the bore through a rigid line, but the braided hose swells with pressure and
-    the fluid in the line is compressible, so part of the flow is stored on the way and the
-    bore pressure lags and is filtered more. The simulator splits the line into a transmission
-    line of lumped segments: the hard pipe and needle valve (``R_r + R_v``, carrying the
-    line's inertance ``I_r + I_t``) feed a node holding the pipe's compliance, then ``N`` hose
-    segments of resistance ``R_t / N`` alternate with nodes of compliance
-    ``V_t / (N beta) + l_t e_h / N`` (half of it at each end), ``e_h`` the hose's volumetric
-    expansion per length and pressure (SAE J1401 rates brake hose by it).
-    Source: seed eqs. 12-14, 18, 21c; Stecki and Davis, "Fluid transmission lines -
-    distributed parameter models", Proc. IMechE A 200(4), 1986; SAE J1401.
+    """Hose and pipe compliance between the master cylinder and the bore.
+
+    The seed's flow equation (21c) moves fluid from the master cylinder to the bore through a rigid
+    line, but the braided hose swells with pressure and the fluid in the line is compressible, so
+    part of the flow is stored on the way and the bore pressure lags and is filtered more. The
+    simulator splits the line into a transmission line of lumped segments: the hard pipe and needle
+    valve (``R_r + R_v``, carrying the line's inertance ``I_r + I_t``) feed a node holding the
+    pipe's compliance, then ``N`` hose segments of resistance ``R_t / N`` alternate with nodes of
+    compliance ``V_t / (N beta) + l_t e_h / N`` (half of it at each end), ``e_h`` the hose's
+    volumetric expansion per length and pressure (SAE J1401 rates brake hose by it).
+    Source: seed eqs. 12-14, 18, 21c; Stecki and Davis, "Fluid transmission lines - distributed
+    parameter models", Proc. IMechE A 200(4), 1986; SAE J1401.
     """
 
     strength: float = 1.0

@@ -24,8 +24,10 @@ def _square_gain(ratio: Signal) -> Signal:
 
 @dataclass(frozen=True)
 class OrificeValve(TruthLaw):
-    """Needle valve bound to a rig: linear share plus a Reynolds-dependent orifice (the
-    host's valve-drop port)."""
+    """Needle valve bound to a rig: linear share plus a Reynolds-dependent orifice.
+
+    The host's valve-drop port.
+    """
 
     share: float  # s, -, orifice share of the linearised resistance
     flow_coefficient: float  # K = rho / (2 C_d_inf^2 A_o^2), Pa s^2/m^6
@@ -45,8 +47,10 @@ class OrificeValve(TruthLaw):
         viscosity_factor: Signal,
         linear_factor: Signal,
     ) -> Signal:
-        """Valve drop (Pa): ``(1 - s) R_v Q + s dp_orifice(Q)``, ``R_v`` the rig's linearised
-        resistance (Pa s/m^3)."""
+        """Valve drop (Pa): ``(1 - s) R_v Q + s dp_orifice(Q)``.
+
+        ``R_v`` is the rig's linearised resistance (Pa s/m^3).
+        """
         drop: Signal = (
             1.0 - self.share
         ) * linear_resistance * linear_factor * flow + self.share * self.orifice_drop(
@@ -69,15 +73,17 @@ def describing_function_resistance(valve: OrificeValve, amplitude: float) -> flo
 
 @dataclass(frozen=True)
 class OrificeFlow(Effect):
-    """Turbulent orifice flow in the needle valve: the seed linearises the valve about an
-    operating drop (eqs. 15-17, ``R_v = 2 sqrt(gamma dp_o) / B_V``), but a needle valve's
-    pressure drop grows with the square of the flow once its jet is turbulent, so its
-    resistance rises with the flow amplitude. The simulator gives a share ``s`` of the valve's
-    linearised resistance to an orifice ``dp = rho Q |Q| / (2 C_d(Re)^2 A_o^2)`` whose
-    discharge coefficient rises with the jet's Reynolds number ``Re = 4 |Q| / (pi d_o nu)``
-    as ``C_d = C_d_inf (1 - exp(-sqrt(Re / Re_t)))``: laminar (``dp ~ Q``) near flow reversal,
-    turbulent (``dp ~ Q |Q|``) at the flow peaks. Its size is set so that its describing-function
-    resistance at the reference flow amplitude equals the rig's ``R_v``; the rest stays linear.
+    """Turbulent orifice flow in the needle valve.
+
+    The seed linearises the valve about an operating drop (eqs. 15-17,
+    ``R_v = 2 sqrt(gamma dp_o) / B_V``), but a needle valve's pressure drop grows with the square
+    of the flow once its jet is turbulent, so its resistance rises with the flow amplitude. The
+    simulator gives a share ``s`` of the valve's linearised resistance to an orifice
+    ``dp = rho Q |Q| / (2 C_d(Re)^2 A_o^2)`` whose discharge coefficient rises with the jet's
+    Reynolds number ``Re = 4 |Q| / (pi d_o nu)`` as ``C_d = C_d_inf (1 - exp(-sqrt(Re / Re_t)))``:
+    laminar (``dp ~ Q``) near flow reversal, turbulent (``dp ~ Q |Q|``) at the flow peaks. Its size
+    is set so that its describing-function resistance at the reference flow amplitude equals the
+    rig's ``R_v``; the rest stays linear.
     Source: seed eqs. 15-17; Merritt, Hydraulic Control Systems (Wiley 1967), ch. 3.
     """
 

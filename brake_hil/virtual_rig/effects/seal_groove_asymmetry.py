@@ -15,16 +15,22 @@ SWITCH_WIDTH = 1.0e-6
 
 
 def asymmetric_spring(deflection: Signal, asymmetry: float, width: float) -> Signal:
-    """Effective deflection (m) of a spring that is ``(1 - a)`` as stiff on the apply side
-    (``e > 0``) as on average and ``(1 + a)`` on the release side: ``e - a e tanh(e / w)``."""
+    """Effective deflection (m) of an asymmetric spring: ``e - a e tanh(e / w)``.
+
+    The spring is ``(1 - a)`` as stiff on the apply side (``e > 0``) as on average and ``(1 + a)``
+    on the release side.
+    """
     effective: Signal = deflection - asymmetry * deflection * fm.tanh(deflection / width)
     return effective
 
 
 @dataclass(frozen=True)
 class GrooveAsymmetry(TruthLaw):
-    """The groove's asymmetry bound to a strength: the host's spring-deflection port (state
-    ``x_r``, the seal's relaxed position) and the seal's apply/release asymmetry."""
+    """The groove's asymmetry bound to a strength.
+
+    The host's spring-deflection port (state ``x_r``, the seal's relaxed position) and the seal's
+    apply/release asymmetry.
+    """
 
     asymmetry: float  # a, -
     relaxation_time: float  # tau_r, s
@@ -54,14 +60,15 @@ class GrooveAsymmetry(TruthLaw):
 
 @dataclass(frozen=True)
 class SealGrooveAsymmetry(Effect):
-    """Seal-groove asymmetry: the groove's chamfer on the pressure side lets the rectangular
-    seal shear easily as the piston moves out (apply) and makes it push back harder as the
-    piston returns (release, the seal's "rollback"), so the seal's stiffness and its slip
-    threshold differ between the two directions (Anwana, Cai, Chang, "Analysis of brake
-    caliper seal-groove design", SAE 2002-01-0927). On the equivalent spring ``k_eh`` the
-    simulator measures the seal's deflection ``e`` from its slowly creeping relaxed position
-    ``x_r`` (``x_r' = e / tau_r``) and gives it stiffness ``(1 - a) k_eh`` on the apply side
-    and ``(1 + a) k_eh`` on the release side, smoothly:
+    """Seal-groove asymmetry: the seal's stiffness and slip threshold differ on apply and release.
+
+    The groove's chamfer on the pressure side lets the rectangular seal shear easily as the piston
+    moves out (apply) and makes it push back harder as the piston returns (release, the seal's
+    "rollback"), so the seal's stiffness and its slip threshold differ between the two directions
+    (Anwana, Cai, Chang, "Analysis of brake caliper seal-groove design", SAE 2002-01-0927). On the
+    equivalent spring ``k_eh`` the simulator measures the seal's deflection ``e`` from its slowly
+    creeping relaxed position ``x_r`` (``x_r' = e / tau_r``) and gives it stiffness
+    ``(1 - a) k_eh`` on the apply side and ``(1 + a) k_eh`` on the release side, smoothly:
     ``F = k_eh (x_r + e - a e tanh(e / w))``; on a frictional seal (seal_stick_slip) the slip
     threshold is ``(1 - a) g(v)`` on apply and ``(1 + a) g(v)`` on release.
     Source: the seed's list of physics its LTI model leaves out; Anwana et al. (2002).

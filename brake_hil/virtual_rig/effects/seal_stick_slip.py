@@ -27,8 +27,10 @@ def smooth_speed(velocity: Signal) -> Signal:
 
 @dataclass(frozen=True)
 class LuGreSeal(TruthLaw):
-    """LuGre friction law of both seals together, bound to a rig (SI): the host's seal-force
-    port (state ``z``, the seals' shear deflection) and structural damping."""
+    """LuGre friction law of both seals together, bound to a rig (SI).
+
+    The host's seal-force port (state ``z``, the seals' shear deflection) and structural damping.
+    """
 
     bristle_stiffness: float  # sigma_0 = 2 k_s, N/m
     static_force: float  # F_S = 2 F_fs, N
@@ -43,8 +45,11 @@ class LuGreSeal(TruthLaw):
     def slip_force(
         self, velocity: Signal, deflection: Signal, asymmetry: float, modulus_factor: Signal
     ) -> Signal:
-        """Stribeck curve ``g(v)`` (N), times ``(1 - a)`` on the apply side of the seal's
-        deflection (``z > 0``) and ``(1 + a)`` on the release side, switched smoothly."""
+        """Stribeck curve ``g(v)`` (N), scaled by the side of the seal's deflection.
+
+        Times ``(1 - a)`` on the apply side of the seal's deflection (``z > 0``) and ``(1 + a)`` on
+        the release side, switched smoothly.
+        """
         decay = fm.exp(-((velocity / self.stribeck_velocity) ** 2))
         slip = (self.coulomb_force + (self.static_force - self.coulomb_force) * decay) * (
             modulus_factor
@@ -113,26 +118,27 @@ class LuGreSeal(TruthLaw):
 
 @dataclass(frozen=True)
 class SealStickSlip(Effect):
-    """Coulomb friction at the piston-seal interface in place of the equivalent viscous
-    ``k_eh``, ``c_eh``. Each rectangular seal is a shear beam of stiffness
-    ``k_s = G_s pi d_p w_s / l_s`` (seed eq. 3) whose inner face sticks to the piston until the
-    shear force reaches ``F_fs = mu_fs E_s eps_s pi d_p w_s`` (seed eq. 2), then slides; the
-    seed's Table 3 (``k_eh`` falling with amplitude) and Table 1 (super-harmonics growing
-    toward ``x_c``) are its signatures. The simulator writes it as a LuGre law (Canudas de Wit,
-    Olsson, Astrom, Lischinsky, IEEE Trans. Automatic Control 40(3), 1995) whose bristle is
+    """Seal stick-slip: Coulomb friction at the piston-seal interface.
+
+    It takes the place of the equivalent viscous ``k_eh``, ``c_eh``. Each rectangular seal is a
+    shear beam of stiffness ``k_s = G_s pi d_p w_s / l_s`` (seed eq. 3) whose inner face sticks to
+    the piston until the shear force reaches ``F_fs = mu_fs E_s eps_s pi d_p w_s`` (seed eq. 2),
+    then slides; the seed's Table 3 (``k_eh`` falling with amplitude) and Table 1 (super-harmonics
+    growing toward ``x_c``) are its signatures. The simulator writes it as a LuGre law (Canudas de
+    Wit, Olsson, Astrom, Lischinsky, IEEE Trans. Automatic Control 40(3), 1995) whose bristle is
     the seals' own shear deflection ``z``: ``z' = v - sigma_0 |v| z / g(v)``,
     ``F = sigma_0 z + sigma_1 z' + sigma_2 v`` with ``sigma_0 = 2 k_s``, the Stribeck curve
-    ``g(v) = F_C + (F_S - F_C) exp(-(v / v_S)^2)``, ``F_S = 2 F_fs`` (Armstrong-Helouvry,
-    Dupont, Canudas de Wit, Automatica 30(7), 1994), a viscous film ``sigma_2`` and the seal's
-    internal damping as LuGre's micro-damping ``sigma_1 = 2 zeta_1 sqrt(sigma_0 M_p)`` (not
-    eq. 6's 5 Hz equivalent ``eta_s sigma_0 / w_e``, which with a Stribeck drop would make the
-    law feed the piston's and caliper's kHz modes). Because ``c_eh`` also lumped the
-    structure's own damping, the caliper and the load cells keep a structural damping ratio
-    ``zeta`` (``2 zeta sqrt(k M)`` on ``k_c`` and ``k_k``). Source: seed eqs. 2-6; LuGre (1995).
+    ``g(v) = F_C + (F_S - F_C) exp(-(v / v_S)^2)``, ``F_S = 2 F_fs`` (Armstrong-Helouvry, Dupont,
+    Canudas de Wit, Automatica 30(7), 1994), a viscous film ``sigma_2`` and the seal's internal
+    damping as LuGre's micro-damping ``sigma_1 = 2 zeta_1 sqrt(sigma_0 M_p)`` (not eq. 6's 5 Hz
+    equivalent ``eta_s sigma_0 / w_e``, which with a Stribeck drop would make the law feed the
+    piston's and caliper's kHz modes). Because ``c_eh`` also lumped the structure's own damping,
+    the caliper and the load cells keep a structural damping ratio ``zeta`` (``2 zeta sqrt(k M)``
+    on ``k_c`` and ``k_k``).
+    Source: seed eqs. 2-6; LuGre (1995).
 
-    ``strength`` is the share of the seal force carried by this law (and of the structural
-    damping added); the rest stays the LTI spring and damper. At 1 the seals are purely
-    frictional.
+    ``strength`` is the share of the seal force carried by this law (and of the structural damping
+    added); the rest stays the LTI spring and damper. At 1 the seals are purely frictional.
     """
 
     strength: float = 1.0
@@ -158,8 +164,10 @@ class SealStickSlip(Effect):
     )
 
     def law(self, plant: LtiPlant) -> LuGreSeal:
-        """The LuGre law of the plant's truth seals (both together), carrying ``strength`` of
-        the seal force, with the structural damping it keeps."""
+        """The LuGre law of the plant's truth seals (both together).
+
+        It carries ``strength`` of the seal force, with the structural damping it keeps.
+        """
         seal = seal_properties(plant.rig)
         stiffness = 2.0 * seal.static_stiffness
         static = 2.0 * seal.friction_threshold

@@ -18,8 +18,10 @@ CHANNELS = ("p_i", "p_b", "F_k", "x_c")
 
 @dataclass(frozen=True)
 class ChannelSkew(TruthLaw):
-    """A channel's acquisition path: a fractional delay then a first-order low-pass (SI),
-    the host's acquisition port."""
+    """A channel's acquisition path: a fractional delay then a first-order low-pass (SI).
+
+    The host's acquisition port.
+    """
 
     channel: str  # p_i, p_b, F_k or x_c
     delay: float  # s, pure (fractional) delay
@@ -60,15 +62,16 @@ class ChannelSkew(TruthLaw):
 
 @dataclass(frozen=True)
 class SensorDelay(Effect):
-    """Sensor delay: one channel reaches the acquisition later than the others (a sensor's own
-    conditioning electronics, a second DAQ card, a transport delay), so its samples are stamped
-    too early and it appears to lag. Phase offsets (``tau / T``, seed Tables 4-5) of a few per
-    cent are a few milliseconds at 5 Hz, so a skew of that size reads as a model error. The
-    simulator delays the chosen channel's true signal by a fractional delay (cubic-spline
-    interpolation between samples; Laakso, Valimaki, Karjalainen, Laine, "Splitting the unit
-    delay", IEEE Signal Processing Magazine 13(1), 1996) and then passes it through a
-    first-order anti-alias low-pass; together they lag the channel by ``strength * delay`` at
-    low frequency, ``filter_share`` of it from the low-pass. Noise and quantisation follow.
+    """Sensor delay: one channel reaches the acquisition later than the others.
+
+    Causes: a sensor's own conditioning electronics, a second DAQ card, a transport delay. Its
+    samples are stamped too early and it appears to lag. Phase offsets (``tau / T``, seed
+    Tables 4-5) of a few per cent are a few milliseconds at 5 Hz, so a skew of that size reads as a
+    model error. The simulator delays the chosen channel's true signal by a fractional delay
+    (cubic-spline interpolation between samples; Laakso, Valimaki, Karjalainen, Laine, "Splitting
+    the unit delay", IEEE Signal Processing Magazine 13(1), 1996) and then passes it through a
+    first-order anti-alias low-pass; together they lag the channel by ``strength * delay`` at low
+    frequency, ``filter_share`` of it from the low-pass. Noise and quantisation follow.
     Source: seed Tables 4-5 (tau / T); Laakso et al. (1996).
     """
 

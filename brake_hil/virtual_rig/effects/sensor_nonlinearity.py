@@ -20,8 +20,10 @@ scale ``x_c`` by ``1 + c p_b``), so it would not be out of the library."""
 
 @dataclass(frozen=True)
 class QuadraticGain(TruthLaw):
-    """A channel read through ``v (1 + curvature v / full_scale)`` (SI), the host's
-    acquisition port."""
+    """A channel read through ``v (1 + curvature v / full_scale)`` (SI).
+
+    The host's acquisition port.
+    """
 
     channel: str  # F_k
     curvature: float  # -, gain change at full scale
@@ -39,12 +41,13 @@ class QuadraticGain(TruthLaw):
 
 @dataclass(frozen=True)
 class SensorNonlinearity(Effect):
-    """Sensor nonlinearity: load cells whose sensitivity changes with their reading (an
-    overloaded strain-gauge bridge, a wrong calibration curve), so ``F_k`` reads
-    ``v (1 + c v / full scale)``. Nothing in
-    the caliper changes: the other channels stay consistent with each other and only this
-    channel's peak-to-peak grows faster than the pressure. No candidate of the diagnosis
-    library models a transducer's gain: a case with this effect is labelled ``unexplained``.
+    """Sensor nonlinearity: load cells whose sensitivity changes with their reading.
+
+    Causes: an overloaded strain-gauge bridge, a wrong calibration curve. ``F_k`` then reads
+    ``v (1 + c v / full scale)``. Nothing in the caliper changes: the other channels stay
+    consistent with each other and only this channel's peak-to-peak grows faster than the pressure.
+    No candidate of the diagnosis library models a transducer's gain: a case with this effect is
+    labelled ``unexplained``.
     Source: OIML R 60 (2000), load-cell non-linearity classes.
     """
 

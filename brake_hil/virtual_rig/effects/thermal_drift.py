@@ -15,8 +15,10 @@ _LOWEST_MODULUS_FACTOR = 0.2
 
 @dataclass(frozen=True)
 class HeatingLaw(TruthLaw):
-    """Temperature and the parameter factors it drives, as functions of time (SI): the
-    host's drift port."""
+    """Temperature and the parameter factors it drives, as functions of time (SI).
+
+    The host's drift port.
+    """
 
     ambient_temperature: float  # T_0, K
     temperature_rise: float  # dT, K (already scaled by strength)
@@ -67,16 +69,17 @@ class HeatingLaw(TruthLaw):
 
 @dataclass(frozen=True)
 class ThermalDrift(Effect):
-    """Thermal drift: repeated pulsing warms the fluid and the seals during a recording, so the
-    brake fluid's viscosity falls (the line's laminar resistances ``R_r``, ``R_t`` of eq. 13
-    and the valve's viscous part drop) and the EPDM seal softens (``E_s`` of eqs. 2-3, hence
-    ``k_s``, ``F_fs`` and ``k_eh``, ``c_eh`` drop), and a model identified at the start drifts
-    away from the rig. The simulator heats by a first-order law
-    ``T = T_0 + dT (1 - exp(-t / tau_th))`` (lumped thermal capacity, Newton cooling), scales the
-    viscosity by Andrade's law ``mu ~ exp(B / T)`` (Andrade, "The viscosity of liquids", Nature
-    125, 1930), the valve's linear resistance by ``(mu / mu_0)^chi`` and every seal stiffness
-    and friction threshold by ``1 + alpha_E (T - T_0)`` (Gent, Engineering with Rubber, Hanser
-    2012). Source: seed eqs. 2-3, 13 and its list of physics left out (temperature).
+    """Thermal drift: repeated pulsing warms the fluid and the seals during a recording.
+
+    The brake fluid's viscosity then falls (the line's laminar resistances ``R_r``, ``R_t`` of
+    eq. 13 and the valve's viscous part drop) and the EPDM seal softens (``E_s`` of eqs. 2-3, hence
+    ``k_s``, ``F_fs`` and ``k_eh``, ``c_eh`` drop), and a model identified at the start drifts away
+    from the rig. The simulator heats by a first-order law ``T = T_0 + dT (1 - exp(-t / tau_th))``
+    (lumped thermal capacity, Newton cooling), scales the viscosity by Andrade's law
+    ``mu ~ exp(B / T)`` (Andrade, "The viscosity of liquids", Nature 125, 1930), the valve's linear
+    resistance by ``(mu / mu_0)^chi`` and every seal stiffness and friction threshold by
+    ``1 + alpha_E (T - T_0)`` (Gent, Engineering with Rubber, Hanser 2012).
+    Source: seed eqs. 2-3, 13 and its list of physics left out (temperature).
     """
 
     strength: float = 1.0
