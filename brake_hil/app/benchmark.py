@@ -202,8 +202,9 @@ def run_benchmark(
     json_path: Path | None = None,
     progress: Callable[[CaseResult], None] | None = None,
 ) -> Benchmark:
-    """``brake-hil benchmark``: the diagnosis blind on ``DIR/cases``, scored on
-    ``DIR/labels.json`` only after every verdict is in.
+    """``brake-hil benchmark``: the diagnosis, blind, on every case of a set.
+
+    Diagnoses ``DIR/cases`` and scores on ``DIR/labels.json`` only after every verdict is in.
 
     Args:
         directory: made by ``brake-hil cases`` (``cases/NNN/`` and ``labels.json``).

@@ -1,5 +1,7 @@
-"""``brake-hil regress``: replay recordings through a model file and hold the comparator's
-metrics against a baseline (ROS-free).
+"""``brake-hil regress``: recordings replayed through a model, held against a baseline.
+
+The comparator's metrics of each recording, replayed through a model file faster than real
+time, are compared with a stored baseline (ROS-free).
 
 The scoring is the comparator node's (:mod:`brake_hil.analysis.stamp_scoring`), so the node
 and this command agree: the live model steps on raw ``p_i``; its output and the measurements
@@ -88,8 +90,10 @@ def replay_recording(
     mean_pressure: float | None = None,
     period_s: float = signals.EXCITATION_PERIOD_S,
 ) -> ReplayResult:
-    """Step the model file's model over the recording's raw ``p_i`` sample by sample (the
-    live node's stepper), and score it over the steady segments of the filtered ``p_i``.
+    """Replay a recording through a model file's live stepper and score it.
+
+    The model steps over the recording's raw ``p_i`` sample by sample (the live node's
+    stepper) and is scored over the steady segments of the filtered ``p_i``.
 
     ``mean_pressure`` (Pa) defaults to the recording's mean ``p_i``, as the chain passes it
     to the live node.
