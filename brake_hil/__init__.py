@@ -1,7 +1,9 @@
 """brake_hil: hardware-in-the-loop testing of hydraulic disk brakes (ROS 2 node suite).
 
-``brake_hil.core`` is ROS-free physics, signals, identification and diagnosis (numpy/scipy);
-``brake_hil.io`` reads and writes recordings; ``brake_hil.nodes`` are thin rclpy adapters.
+``physics``, ``analysis``, ``diagnosis``, ``live`` and ``runtime`` are the ROS-free core
+(numpy/scipy); ``io`` reads and writes recordings and CAN frames; ``virtual_rig`` simulates
+the rig; ``app`` holds the commands, ``cli`` their command line; ``nodes`` are thin rclpy
+adapters (README, Layout).
 """
 
 import os
