@@ -12,6 +12,7 @@
      +-- BaselineError (ValueError)         a regression baseline is missing or malformed
      +-- EffectError (ValueError)           an effect is unknown, doubled or out of bounds
      +-- SimulationError (RuntimeError)     the virtual rig's solver failed
+     +-- FitError (ArithmeticError)         a model's simulation is not finite where a fit starts
      +-- CanDaqError                        a CAN acquisition cannot be set up
           +-- DbcError (ValueError)         the CAN database does not describe rig frames
           +-- FrameError (ValueError)       one received frame is refused
@@ -33,6 +34,7 @@ __all__ = [
     "DbcError",
     "EffectError",
     "FrameError",
+    "FitError",
     "FrameLengthError",
     "ImprovedModelError",
     "MissingTopicError",
@@ -83,6 +85,10 @@ class EffectError(BrakeHilError, ValueError):
 
 class SimulationError(BrakeHilError, RuntimeError):
     """The virtual rig's solver failed (it names the time reached and the solver's message)."""
+
+
+class FitError(BrakeHilError, ArithmeticError):
+    """A candidate model cannot be fitted: its simulation is not finite at the fit's start."""
 
 
 class CanDaqError(BrakeHilError):

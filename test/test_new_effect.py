@@ -158,3 +158,48 @@ def test_a_tenth_effect_runs_through_the_virtual_rig_and_the_diagnosis(
 def test_after_the_test_the_tenth_effect_is_gone() -> None:
     assert "bore_sensor_offset" not in catalogue.CATALOGUE
     assert "bore_sensor_offset" not in [c.name for c in CANDIDATES]
+
+
+# --------------------------------------------------------------------- a model that diverges
+
+
+@dataclasses.dataclass(frozen=True)
+class _Diverging(Term):
+    def transform(self, outputs: FloatArray, sample_time: float) -> FloatArray:
+        return outputs * np.inf
+
+
+class _DivergingCandidate(Candidate):
+    """A candidate whose simulation is never finite (an unstable term, as an explicit drop
+    with a large coefficient can be)."""
+
+    entry = ZERO_OFFSET
+    parameters = (CandidateParameter("gain", "-", 0.0, 1.0, 0.5),)
+
+    def fill(self, draft: Draft, theta: FloatArray, context: Context) -> None:
+        draft.add(_Diverging())
+
+
+@pytest.fixture
+def diverging_candidate() -> Iterator[None]:
+    catalogue.register(ZERO_OFFSET)
+    try:
+        register_candidate(_DivergingCandidate())
+        yield
+    finally:
+        unregister_candidate(ZERO_OFFSET.name)
+        catalogue.unregister(ZERO_OFFSET.name)
+
+
+def test_a_hypothesis_that_cannot_be_simulated_is_left_out_not_a_crash(
+    diverging_candidate: None, default_rig: Rig
+) -> None:
+    run = simulate_rig(
+        default_rig, [parse_effect("sensor_delay=1.0")], seed_pulsing((1.38e6,), pulsing_s=3.0)
+    )
+    said: list[str] = []
+    result = diagnose(run.as_recording(), default_rig, progress=said.append)
+    assert result.unfitted == ("bore_sensor_offset",)
+    assert any("not finite where its fit starts" in line for line in said)
+    assert result.effects == ("sensor_delay",), result.explanation
+    assert result.as_dict()["unfitted_hypotheses"] == ["bore_sensor_offset"]

@@ -31,7 +31,7 @@ from brake_hil.diagnosis.dataset import Dataset, prepare
 from brake_hil.diagnosis.evidence import Evidence, collect
 from brake_hil.diagnosis.fitting import Fit, Model, fit
 from brake_hil.diagnosis.improved_model import ImprovedModel
-from brake_hil.errors import BrakeHilError
+from brake_hil.errors import BrakeHilError, FitError
 from brake_hil.physics.rig import Rig
 from brake_hil.topics import OUTPUT_CHANNELS
 
@@ -80,6 +80,7 @@ class Diagnosis:
     improved_metrics: dict[str, dict[str, float]]
     dataset: Dataset
     summary: Summary
+    unfitted: tuple[str, ...] = ()  # hypotheses left out: not finite where their fit starts
 
     def improved_model(self, rig_path: Path) -> ImprovedModel:
         """The improved model in the form the caliper-model node loads."""
@@ -143,6 +144,7 @@ class Diagnosis:
                 "parameters": self.improved.parameters(),
                 "metrics": self.improved_metrics,
             },
+            "unfitted_hypotheses": list(self.unfitted),
             "decision_inputs": self.summary.as_dict(),
             "split": {
                 "train": [[w.start, w.end] for w in self.dataset.train],
@@ -197,10 +199,12 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
     table3 = characterize(recording, rig)
     evidence = collect(baseline_model, baseline.theta, [(s.ptp_pressure, s.k_eh) for s in table3])
     singles: list[Fit] = []
+    unfitted: list[str] = []
     for single in CANDIDATES:
         say(f"fitting {single.name}")
-        singles.append(fit(Model(calibration, [single], dataset)))
-    pairs = _fit_pairs(calibration, dataset, baseline, singles, say)
+        fitted = _try_fit(Model(calibration, [single], dataset), None, unfitted, say)
+        singles.extend(fitted)
+    pairs = _fit_pairs(calibration, dataset, baseline, singles, unfitted, say)
     hypotheses = singles + pairs
     summary = summarise(baseline, singles, pairs, dataset.noise_cost(), evidence)
     verdict = decide(summary)
@@ -247,7 +251,25 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         improved_metrics=held_out_metrics(improved_model, improved.theta),
         dataset=dataset,
         summary=summary,
+        unfitted=tuple(unfitted),
     )
+
+
+def _try_fit(
+    model: Model, start: np.ndarray | None, unfitted: list[str], say: Progress
+) -> list[Fit]:
+    """The fit of ``model`` as a one-item list; none when its simulation is not finite.
+
+    A hypothesis that cannot be simulated is left out of the decision and named in
+    ``unfitted`` (``diagnosis.json``: ``unfitted_hypotheses``), never a crash of the whole
+    diagnosis.
+    """
+    try:
+        return [fit(model, start=start)]
+    except FitError as error:
+        unfitted.append("+".join(model.names))
+        say(f"left out: {error}")
+        return []
 
 
 def _fit_pairs(
@@ -255,6 +277,7 @@ def _fit_pairs(
     dataset: Dataset,
     baseline: Fit,
     singles: list[Fit],
+    unfitted: list[str],
     say: Progress,
 ) -> list[Fit]:
     """Pairs of the best plausible single with the next ``PAIR_SHORTLIST`` plausible ones.
@@ -276,7 +299,7 @@ def _fit_pairs(
         other_own = len(other.theta) - len(calibration.sigmas)
         start = np.concatenate([best.theta[:own], other.theta[:other_own], best.theta[own:]])
         model = Model(calibration, [candidate(n) for n in names], dataset)
-        pairs.append(fit(model, start=start))
+        pairs.extend(_try_fit(model, start, unfitted, say))
     return pairs
 
 

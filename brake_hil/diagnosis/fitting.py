@@ -19,6 +19,7 @@ from brake_hil.diagnosis.calibration import MODEL_ERROR, Calibration, apply_mult
 from brake_hil.diagnosis.candidates.base import Candidate, Context, Draft, rig_context
 from brake_hil.diagnosis.dataset import Dataset, Window
 from brake_hil.diagnosis.engine import ModelSpec, simulate_batch
+from brake_hil.errors import FitError
 from brake_hil.topics import OUTPUT_CHANNELS
 from brake_hil.types import FloatArray, IndexArray
 
@@ -223,7 +224,11 @@ def fit(model: Model, start: FloatArray | None = None, max_iterations: int = 15)
 
     The objective is the calibration's: data residuals over ``MODEL_ERROR`` plus the prior
     on the calibration multipliers. The Jacobian's columns are simulated in one batch with
-    the point itself.
+    the point itself. A ``start`` at which the simulation is not finite (two effects' fitted
+    values can make an explicit term unstable together) falls back to the model's own start.
+
+    Raises:
+        FitError: the simulation is not finite at the model's own start either.
     """
     ds = model.dataset
     specs = model.parameters()
@@ -261,15 +266,21 @@ def fit(model: Model, start: FloatArray | None = None, max_iterations: int = 15)
         actual = np.array([_step(x, j, steps[j], upper)[j] - x[j] for j in range(x.size)])
         return np.asarray((r[1:] - r[0]).T / actual, dtype=float)
 
-    result = scipy.optimize.least_squares(
-        residual,
-        x0,
-        jac=jacobian,
-        bounds=(lower, upper),
-        method="trf",
-        max_nfev=max_iterations,
-        x_scale=width / 4,
-    )
+    with np.errstate(over="ignore", invalid="ignore"):  # non-finite is handled here
+        if not np.all(np.isfinite(evaluate(x0))) and start is not None:
+            x0 = np.clip(_to_search(model, model.start()), lower, upper)  # the model's own start
+        if not np.all(np.isfinite(evaluate(x0))):
+            name = " + ".join(model.names) or "the LTI baseline"
+            raise FitError(f"{name}: the model's simulation is not finite where its fit starts")
+        result = scipy.optimize.least_squares(
+            residual,
+            x0,
+            jac=jacobian,
+            bounds=(lower, upper),
+            method="trf",
+            max_nfev=max_iterations,
+            x_scale=width / 4,
+        )
     theta = _from_search(model, result.x)
     data_part = result.fun[: result.fun.size - sigma.size] * MODEL_ERROR
     train_cost = float(np.sum(data_part**2))
