@@ -6,6 +6,7 @@
      +-- RigError (ValueError)              a rig description is refused
      +-- RecordingError (ValueError)        a recording cannot be used
      |    +-- MissingTopicError             a required topic is absent
+     +-- RecordingWriteError                a recording cannot be written on (disk full)
      +-- SignalError (ValueError)           a signal is too short or not periodic
      +-- ModelFileError (ValueError)        a model file is missing or of an unknown kind
      +-- ImprovedModelError (ValueError)    an improved_model.json is malformed
@@ -40,6 +41,7 @@ __all__ = [
     "MissingTopicError",
     "ModelFileError",
     "RecordingError",
+    "RecordingWriteError",
     "RigError",
     "SignalError",
     "SimulationError",
@@ -61,6 +63,10 @@ class RecordingError(BrakeHilError, ValueError):
 
 class MissingTopicError(RecordingError):
     """A topic the command needs is not in the recording."""
+
+
+class RecordingWriteError(BrakeHilError):
+    """Writing a recording failed (disk full, file size limit, I/O error)."""
 
 
 class SignalError(BrakeHilError, ValueError):

@@ -26,11 +26,15 @@ recorder passes the receive time; ``header.stamp`` stays inside the message).
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from contextlib import suppress
+import copy
 from dataclasses import dataclass, field
+import errno
 import os
 from pathlib import Path
 import re
 import struct
+import time
 from types import TracebackType
 from typing import Any, Final, NamedTuple, Self
 
@@ -44,6 +48,7 @@ from rosbags.typesys.store import Typestore
 import yaml
 
 from brake_hil import __version__
+from brake_hil.errors import RecordingWriteError
 
 METADATA_VERSION: Final = 9
 """rosbag2 metadata version written (Kilted)."""
@@ -132,16 +137,45 @@ class _CommitStream:
         """No-op: content reaches the file only through :meth:`commit`."""
 
     def commit(self, final: bool = False) -> None:
-        """Write the pending bytes (plus a temporary footer unless ``final``) in one pwrite."""
+        """Write the pending bytes (plus a temporary footer unless ``final``) in one pwrite.
+
+        Raises:
+            OSError: the write failed (disk full, file size limit, I/O error); the file is
+                put back as it was after the last commit (see :meth:`roll_back`) and the
+                pending bytes are dropped.
+        """
         data = bytes(self._pending) if final else bytes(self._pending) + _FOOTER
         view, offset = memoryview(data), self._committed
-        while view:
-            written = os.pwrite(self._fd, view, offset)
-            view, offset = view[written:], offset + written
+        try:
+            while view:
+                written = os.pwrite(self._fd, view, offset)
+                view, offset = view[written:], offset + written
+            if final:
+                os.ftruncate(self._fd, self._committed + len(self._pending))
+        except OSError:
+            self._pending.clear()
+            self.roll_back()
+            raise
         self._committed += len(self._pending)
         self._pending.clear()
-        if final:
-            os.ftruncate(self._fd, self._committed)
+
+    def discard(self) -> None:
+        """Drop the pending bytes."""
+        self._pending.clear()
+
+    def roll_back(self) -> bool:
+        """Cut the file back to its last commit and its temporary footer; True when it worked.
+
+        The blocks up to the old footer's end were allocated before, so this needs no new
+        space: after a failed write on a full disk the file is again a valid MCAP (no
+        summary) holding every committed chunk.
+        """
+        try:
+            os.ftruncate(self._fd, self._committed + len(_FOOTER))
+            os.pwrite(self._fd, _FOOTER, self._committed)
+        except OSError:
+            return False
+        return True
 
     def close(self) -> None:
         os.close(self._fd)
@@ -159,13 +193,18 @@ class _OpenFile:
             compression=compression,
             enable_crcs=True,
         )
-        self.writer.start(profile="ros2", library=f"brake_hil {__version__}")
-        self.stream.commit()  # header + temporary footer: a valid empty MCAP from the start
+        try:
+            self.writer.start(profile="ros2", library=f"brake_hil {__version__}")
+            self.stream.commit()  # header + temporary footer: a valid empty MCAP from the start
+        except OSError:
+            self.stream.close()
+            raise
         self.schema_ids: dict[str, int] = {}
         self.channel_ids: dict[int, int] = {}  # topic handle -> MCAP channel id
         self.committed = _Counts()
         self.pending = _Counts()
         self.first_log_ns: int | None = None
+        self.pending_since_ns = 0  # monotonic time of the pending chunk's first message
 
     def add_topic(self, handle: int, topic: TopicInfo, qos_text: str) -> None:
         if (schema := self.schema_ids.get(topic.msgtype)) is None:
@@ -256,9 +295,22 @@ class McapRecorder:
             seconds after the file's first message; None: no duration limit.
         chunk_bytes: uncompressed size of an MCAP chunk (bytes); a chunk is the unit that
             reaches the disk, so at most this much is lost by ``kill -9``.
+        max_chunk_age_s: commit the chunk in progress at the first message written this long
+            (s, monotonic) after the chunk's first message; None: only full chunks and
+            :meth:`flush` commit. With a timer calling :meth:`flush` at the same interval,
+            ``kill -9`` loses at most this span of messages (plus what the caller had not
+            yet passed to :meth:`write`).
         compression: ``"zstd"``, ``"lz4"`` or ``"none"`` (chunk compression).
         custom_data: ``custom_data`` of ``metadata.yaml`` (strings).
         typestore: where message definitions and hashes come from (default ROS 2 Kilted).
+
+    A failed write (disk full, file size limit, I/O error) stops the recording: the file is
+    cut back to its last whole chunk and temporary footer (a valid MCAP without summary, every
+    committed message readable), ``metadata.yaml`` keeps the counts of that commit, the
+    pending chunk is dropped, and :meth:`write` and :meth:`flush` raise
+    :class:`~brake_hil.errors.RecordingWriteError` (also kept in :attr:`failure`) from then
+    on; :meth:`close` then closes the file without a summary (``brake-hil recover`` writes a
+    finished copy).
 
     Raises:
         FileExistsError: ``path`` exists.
@@ -272,6 +324,7 @@ class McapRecorder:
         max_file_bytes: int | None = None,
         max_file_duration_s: float | None = None,
         chunk_bytes: int = 1 << 20,
+        max_chunk_age_s: float | None = None,
         compression: str = "zstd",
         custom_data: Mapping[str, str] | None = None,
         typestore: Typestore | None = None,
@@ -281,6 +334,7 @@ class McapRecorder:
             ("max_file_bytes", max_file_bytes),
             ("max_file_duration_s", max_file_duration_s),
             ("chunk_bytes", chunk_bytes),
+            ("max_chunk_age_s", max_chunk_age_s),
         ):
             if limit is not None and not limit > 0:
                 raise ValueError(f"{name} must be > 0, got {limit}")
@@ -294,6 +348,9 @@ class McapRecorder:
             None if max_file_duration_s is None else round(max_file_duration_s * 1e9)
         )
         self._chunk_bytes = chunk_bytes
+        self._max_chunk_age_ns = None if max_chunk_age_s is None else round(max_chunk_age_s * 1e9)
+        self.failure: RecordingWriteError | None = None
+        """Why writing stopped; None while the recording is healthy."""
         self._custom_data = dict(custom_data or {})
         self._typestore = typestore
         if self.path.exists():
@@ -331,7 +388,10 @@ class McapRecorder:
         Raises:
             ValueError: the topic is registered already, or the typestore does not know
                 ``msgtype`` and no ``msgdef``/``type_hash`` are given.
+            RecordingWriteError: writing failed now or before (see the class doc).
         """
+        if self.failure is not None:
+            raise self.failure
         if any(t.name == name for t in self.topics):
             raise ValueError(f"{self.path}: topic {name} is registered already")
         if msgdef is None or type_hash is None:
@@ -350,19 +410,44 @@ class McapRecorder:
         self._qos_texts.append(_qos_text(topic.offered_qos_profiles))
         assert self._file is not None
         self._file.add_topic(handle, topic, self._qos_texts[handle])
-        self._write_metadata()
+        try:
+            self._write_metadata()
+        except OSError as err:
+            raise self._fail(err) from err
         return handle
 
     # -- writing -------------------------------------------------------------------------
 
-    def write(self, handle: int, log_time_ns: int, data: bytes) -> None:
+    def write(
+        self, handle: int, log_time_ns: int, data: bytes, publish_time_ns: int | None = None
+    ) -> None:
         """Append one serialised message of topic ``handle``.
 
-        ``log_time_ns`` is its log time (ns since the epoch; also written as publish time).
+        ``log_time_ns`` is its log time (ns since the epoch), also written as publish time
+        unless ``publish_time_ns`` is given.
+
+        Raises:
+            RecordingWriteError: writing failed now or before (see the class doc).
+            ValueError: the recording is closed.
         """
+        if self.failure is not None:
+            raise self.failure
         current = self._file
         if current is None:
             raise ValueError(f"{self.path}: the recording is closed")
+        try:
+            self._write(current, handle, log_time_ns, data, publish_time_ns)
+        except OSError as err:
+            raise self._fail(err) from err
+
+    def _write(
+        self,
+        current: _OpenFile,
+        handle: int,
+        log_time_ns: int,
+        data: bytes,
+        publish_time_ns: int | None,
+    ) -> None:
         if current.first_log_ns is None:
             current.first_log_ns = log_time_ns
         elif (
@@ -373,29 +458,78 @@ class McapRecorder:
             current = self._file
             assert current is not None
             current.first_log_ns = log_time_ns
-        current.writer.add_message(current.channel_ids[handle], log_time_ns, data, log_time_ns)
+        publish = log_time_ns if publish_time_ns is None else publish_time_ns
+        current.writer.add_message(current.channel_ids[handle], log_time_ns, data, publish)
+        if not current.pending.per_topic:
+            current.pending_since_ns = time.monotonic_ns()
         current.pending.add(handle, log_time_ns)
         if current.stream.pending:  # the writer finished a chunk
             self._commit()
-
-    def flush(self) -> None:
-        """Commit the chunk in progress now (call on a timer to bound what ``kill -9`` loses)."""
-        if self._file is not None and self._file.pending.total:
-            self._file.writer.flush()  # type: ignore[no-untyped-call]
+        elif (
+            self._max_chunk_age_ns is not None
+            and time.monotonic_ns() - current.pending_since_ns >= self._max_chunk_age_ns
+        ):
+            current.writer.flush()  # type: ignore[no-untyped-call]
             self._commit()
 
-    def _commit(self) -> None:
-        """Put the finished chunk on disk and the counts it holds into ``metadata.yaml``."""
+    def flush(self) -> None:
+        """Commit the chunk in progress now (call on a timer to bound what ``kill -9`` loses).
+
+        Raises:
+            RecordingWriteError: writing failed now or before (see the class doc).
+        """
+        if self.failure is not None:
+            raise self.failure
+        if self._file is not None and self._file.pending.total:
+            try:
+                self._file.writer.flush()  # type: ignore[no-untyped-call]
+                self._commit()
+            except OSError as err:
+                raise self._fail(err) from err
+
+    def _fail(self, err: OSError) -> RecordingWriteError:
+        """Stop the recording after a failed write: keep what is on disk, drop the rest."""
+        current = self._file
+        where = self.path
+        if current is not None:
+            where = current.stream.path
+            current.stream.discard()
+            current.stream.roll_back()
+            current.pending = _Counts()
+        with suppress(OSError):
+            (self.path / "metadata.yaml.tmp").unlink(missing_ok=True)
+        code = errno.errorcode.get(err.errno or 0, "")
+        reason = f"{err.strerror or err} ({code})" if code else str(err.strerror or err)
+        on_disk = sum(self._counts.values())
+        self.failure = RecordingWriteError(
+            f"{where}: cannot write the recording: {reason}; recording stopped, the "
+            f"{on_disk} messages committed before stay readable"
+        )
+        return self.failure
+
+    def _commit(self, split: bool = True) -> None:
+        """Put the finished chunk on disk and the counts it holds into ``metadata.yaml``.
+
+        Starts the next file after it when ``split`` and the file reached its size limit.
+
+        Raises:
+            OSError: a write failed; the counts stay those on disk.
+        """
         current = self._file
         assert current is not None
+        saved = copy.deepcopy(current.committed), dict(self._counts), current.pending
         current.committed.merge(current.pending)
         for handle, count in current.pending.per_topic.items():
             self._counts[handle] = self._counts.get(handle, 0) + count
         current.pending = _Counts()
-        tmp = self._prepare_metadata(size=current.stream.tell())
-        current.stream.commit()
+        try:
+            tmp = self._prepare_metadata(size=current.stream.tell())
+            current.stream.commit()
+        except OSError:
+            current.committed, self._counts, current.pending = saved
+            raise
         tmp.replace(self.path / "metadata.yaml")
-        if self._max_bytes is not None and current.stream.size >= self._max_bytes:
+        if split and self._max_bytes is not None and current.stream.size >= self._max_bytes:
             self._split()
 
     def _split(self) -> None:
@@ -406,24 +540,28 @@ class McapRecorder:
     def _open_next_file(self) -> None:
         index = len(self._closed_files)
         path = self.path / f"{self.path.name}_{index}.mcap"
-        self._file = _OpenFile(path, self._chunk_bytes, self._compression)
+        try:
+            self._file = _OpenFile(path, self._chunk_bytes, self._compression)
+        except OSError:  # not even a header fits: leave no file a reader would choke on
+            with suppress(OSError):
+                path.unlink()
+            raise
         for handle, topic in enumerate(self.topics):
             self._file.add_topic(handle, topic, self._qos_texts[handle])
         self._write_metadata()
 
     def _finish_file(self) -> None:
-        current, self._file = self._file, None
+        current = self._file
         assert current is not None
-        current.writer.flush()  # type: ignore[no-untyped-call]
-        current.committed.merge(current.pending)
-        for handle, count in current.pending.per_topic.items():
-            self._counts[handle] = self._counts.get(handle, 0) + count
-        current.pending = _Counts()
+        if current.pending.total:  # the last chunk first: a failed summary loses no message
+            current.writer.flush()  # type: ignore[no-untyped-call]
+            self._commit(split=False)
         files = [*self._closed_files, current.info()]
         serialized = _dump(_bag_metadata(files, self.topics, self._counts, self._custom_data))
         current.writer.add_metadata("rosbag2", {"serialized_metadata": serialized})
         current.writer.finish()  # type: ignore[no-untyped-call]
         current.stream.commit(final=True)
+        self._file = None
         current.stream.close()
         self._closed_files.append(current.info())
 
@@ -456,11 +594,39 @@ class McapRecorder:
     # -- closing -------------------------------------------------------------------------
 
     def close(self) -> None:
-        """Finish the open file (summary, indexes) and write the final ``metadata.yaml``."""
+        """Finish the open file (summary, indexes) and write the final ``metadata.yaml``.
+
+        After a failed write (:attr:`failure`) the open file is closed as it stands (its last
+        whole chunk and a temporary footer) and ``metadata.yaml`` is rewritten when the disk
+        allows; nothing is raised.
+
+        Raises:
+            RecordingWriteError: finishing failed (the recording stays as described above).
+        """
         if self._file is None:
             return
-        self._finish_file()
-        self._write_metadata()
+        if self.failure is None:
+            try:
+                self._finish_file()
+                self._write_metadata()
+            except OSError as err:
+                self._fail(err)
+                if self._file is not None:
+                    self._close_failed()
+                raise self.failure from err  # type: ignore[misc]
+            return
+        self._close_failed()
+
+    def _close_failed(self) -> None:
+        """Close the open file of a failed recording as it is on disk."""
+        current, self._file = self._file, None
+        assert current is not None
+        current.stream.close()
+        self._closed_files.append(current.info())
+        with suppress(OSError):
+            self._write_metadata()
+        with suppress(OSError):
+            (self.path / "metadata.yaml.tmp").unlink(missing_ok=True)
 
     def __enter__(self) -> Self:
         return self

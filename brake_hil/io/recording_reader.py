@@ -4,7 +4,9 @@ Accepted (interface.md, "Recordings"): a rosbag2 directory (``metadata.yaml`` wi
 more ``.mcap`` or ``.db3`` files), a bare ``.mcap`` file and a bare ``.db3`` file. rosbags'
 ``Reader`` yields raw CDR bytes, so only the brake topics are decoded, by
 :mod:`brake_hil.io.stamped_cdr`; unrelated topics, unknown types and service events are
-listed but never deserialised.
+listed but never deserialised. An unfinished MCAP recording (a writer killed, a full disk:
+no summary, a cut file, ``metadata.yaml`` missing or stale) is read from the whole chunks of
+its files, with one line on stderr saying so (:mod:`brake_hil.io.unfinished`).
 
 Every value carries its ``header.stamp``, not its log time. Channels are aligned to the
 stamps of ``/brake/master_cylinder/pressure`` (``p_i``): copied where the stamps coincide,
@@ -22,7 +24,7 @@ from collections.abc import Mapping, Sequence
 import errno
 import os
 from pathlib import Path
-from typing import Final, NamedTuple
+from typing import Final, NamedTuple, cast
 
 import numpy as np
 from rosbags.interfaces import Connection
@@ -31,6 +33,7 @@ from rosbags.rosbag2 import Reader
 from brake_hil.analysis.recording import Recording
 from brake_hil.errors import MissingTopicError, RecordingError
 from brake_hil.io.stamped_cdr import decode_stamped
+from brake_hil.io.unfinished import open_unfinished
 from brake_hil.topics import (
     AIR_PRESSURE,
     BLOCK_FORCE,
@@ -93,8 +96,8 @@ def _check_path(path: Path) -> None:
         missing = FileNotFoundError(errno.ENOENT, os.strerror(errno.ENOENT), str(path))
         raise _fail(path, "no such file or directory") from missing
     if path.is_dir():
-        if (path / "metadata.yaml").is_file():
-            return
+        if (path / "metadata.yaml").is_file() or any(path.glob("*.mcap")):
+            return  # without metadata.yaml: an unfinished recording (io.unfinished)
         found = sorted(p.name for p in path.iterdir() if p.suffix in _BAG_SUFFIXES)
         hint = f"; pass the storage file itself ({', '.join(found)})" if found else ""
         raise _fail(path, f"not a rosbag2 directory: no metadata.yaml{hint}")
@@ -103,8 +106,14 @@ def _check_path(path: Path) -> None:
 
 
 def _open(path: Path) -> Reader:
-    """An open rosbags reader of ``path``; every library error becomes a RecordingError."""
+    """An open rosbags reader of ``path``; every library error becomes a RecordingError.
+
+    An unfinished MCAP recording is read by streaming its whole chunks instead
+    (:func:`~brake_hil.io.unfinished.open_unfinished`, one line on stderr).
+    """
     _check_path(path)
+    if (salvaged := open_unfinished(path)) is not None:
+        return cast(Reader, salvaged)  # answers topics, messages and close as Reader does
     try:
         reader = Reader(path)
         reader.open()

@@ -56,11 +56,17 @@ def test_a_directory_without_a_bag_is_refused(tmp_path: Path) -> None:
     _refusal(tmp_path, "not a rosbag2 directory", "metadata.yaml")
 
 
-def test_a_directory_without_metadata_points_at_its_mcap(tmp_path: Path, run: Run) -> None:
+def test_a_directory_without_metadata_is_read_from_its_mcap_and_called_unfinished(
+    tmp_path: Path, run: Run, caplog: pytest.LogCaptureFixture
+) -> None:
     time, channels = run
     bag = write_recording(tmp_path / "run", time, channels)
-    (bag / "metadata.yaml").unlink()
-    _refusal(bag, "no metadata.yaml", "run_0.mcap")
+    (bag / "metadata.yaml").unlink()  # what a kill -9 before the first metadata write leaves
+    recording = read_recording(bag)
+    assert recording.time.size == time.size
+    (note,) = [r.getMessage() for r in caplog.records if r.name == "brake_hil.recording"]
+    assert note.startswith(f"{bag}: unfinished recording (no metadata.yaml)")
+    assert f"recovered {time.size * len(channels)} messages" in note
 
 
 def test_a_file_that_is_not_a_recording_is_refused(tmp_path: Path) -> None:
@@ -76,20 +82,41 @@ def test_a_text_file_named_mcap_is_refused(tmp_path: Path) -> None:
     assert error.__cause__ is not None
 
 
-@pytest.mark.parametrize("inside_directory", [False, True], ids=["bare", "in_bag"])
-def test_an_mcap_cut_in_half_is_refused(tmp_path: Path, run: Run, inside_directory: bool) -> None:
+def _cut(tmp_path: Path, run: Run, inside_directory: bool, keep: int | None = None) -> Path:
+    """The recording's MCAP cut to ``keep`` bytes (half when None); the path to read."""
     time, channels = run
     bag = write_recording(tmp_path / "run", time, channels)
     mcap = bag / "run_0.mcap"
     data = mcap.read_bytes()
+    data = data[: len(data) // 2 if keep is None else keep]
     if inside_directory:
-        target = bag
-        mcap.write_bytes(data[: len(data) // 2])
-    else:
-        target = tmp_path / "cut.mcap"
-        target.write_bytes(data[: len(data) // 2])
-    error = _refusal(target, "truncated or corrupt")
-    assert error.__cause__ is not None
+        mcap.write_bytes(data)
+        return bag
+    target = tmp_path / "cut.mcap"
+    target.write_bytes(data)
+    return target
+
+
+@pytest.mark.parametrize("inside_directory", [False, True], ids=["bare", "in_bag"])
+def test_an_mcap_cut_in_half_is_read_up_to_its_last_whole_chunk(
+    tmp_path: Path, run: Run, inside_directory: bool, caplog: pytest.LogCaptureFixture
+) -> None:
+    time, channels = run
+    target = _cut(tmp_path, run, inside_directory)
+    recording = read_recording(target, required=tuple(channels))
+    assert 0.2 * time.size < recording.time.size < 0.7 * time.size
+    np.testing.assert_array_equal(recording.time, time[: recording.time.size])
+    (note,) = [r.getMessage() for r in caplog.records if r.name == "brake_hil.recording"]
+    assert note.startswith(f"{target}: unfinished recording")
+    assert "the file ends inside a record at byte" in note
+
+
+@pytest.mark.parametrize("inside_directory", [False, True], ids=["bare", "in_bag"])
+def test_an_mcap_cut_before_its_first_whole_chunk_is_refused(
+    tmp_path: Path, run: Run, inside_directory: bool
+) -> None:
+    target = _cut(tmp_path, run, inside_directory, keep=3000)
+    _refusal(target, "unfinished recording", "truncated or corrupt", "not one whole chunk")
 
 
 def test_a_corrupt_byte_inside_a_chunk_is_refused_not_read_as_data(
