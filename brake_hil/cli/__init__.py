@@ -43,6 +43,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return commands.benchmark(args)
         if args.command == "regress":
             return commands.regress(args)
+        if args.command == "recover":
+            return commands.recover(args)
     except BrakeHilError as err:
         print(f"brake-hil {args.command}: error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT

@@ -19,6 +19,7 @@ from brake_hil.app.cases import run_cases
 from brake_hil.app.characterize import run_characterize
 from brake_hil.app.compare import run_compare
 from brake_hil.app.diagnose import DIAGNOSIS_STEPS, run_diagnose
+from brake_hil.app.recover import RecoverResult, run_recover
 from brake_hil.app.regress import MetricCheck, run_regression
 from brake_hil.app.simulate import run_simulate, run_virtual_simulate
 
@@ -267,4 +268,32 @@ def format_checks(checks: tuple[MetricCheck, ...]) -> list[str]:
             f"{c.bag:{width}s}  {c.channel:7s} {c.metric:15s}{baseline:>12s}{c.value:12.5g}"
             f"{delta:>11s}{c.tolerance:9.3g}  {c.status}"
         )
+    return lines
+
+
+def recover(args: argparse.Namespace) -> int:
+    """``brake-hil recover``: 0 when a finished copy was written."""
+    result = run_recover(args.bag, args.out)
+    for line in format_recovery(result):
+        print(line)
+    return 0
+
+
+def format_recovery(result: RecoverResult) -> list[str]:
+    """What ``recover`` prints: the verdict, one line per file, one per topic."""
+    state = f"unfinished ({result.reason})" if result.reason else "finished already"
+    lines = [
+        f"{result.source}: {state}; {result.message_count} messages in "
+        f"{len(result.files)} files written to {result.output} (summaries, indexes, "
+        "statistics, metadata.yaml)"
+    ]
+    for item in result.files:
+        if item.finished:
+            how = "finished"
+        else:
+            how = f"{item.stop}; {item.lost_bytes} bytes after the last whole record dropped"
+        skipped = f", {item.skipped} without channel or schema left out" if item.skipped else ""
+        names = f"{item.source.name} -> {item.output.name}"
+        lines.append(f"  {names}: {item.messages} messages{skipped} ({how})")
+    lines += [f"  {name} ({msgtype}): {count} messages" for name, msgtype, count in result.topics]
     return lines

@@ -60,7 +60,24 @@ def build_parser() -> argparse.ArgumentParser:
     reg.add_argument("--model", type=Path, help="model file (default: the baseline's)")
     reg.add_argument("--update", action="store_true", help="rewrite the baseline")
     reg.add_argument("--jobs", type=int, help="parallel replays (default: one per CPU)")
+    _add_recover_parser(commands)
     return parser
+
+
+def _add_recover_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """``brake-hil recover BAG [--out DIR]``."""
+    rec = commands.add_parser(
+        "recover",
+        help="write a finished copy of an unfinished MCAP recording (kill -9, full disk)",
+        description="Read every whole chunk of a recording a writer did not finish (no "
+        "summary, a cut file, metadata.yaml missing or stale) and write them into a new "
+        "rosbag2 directory with summaries, indexes, statistics and a matching metadata.yaml. "
+        "The input is never written to.",
+    )
+    rec.add_argument("bag", type=Path, help="rosbag2 directory of .mcap files, or a .mcap file")
+    rec.add_argument(
+        "--out", type=Path, help="new rosbag2 directory (default: BAG_recovered beside BAG)"
+    )
 
 
 def _add_virtual_rig_arguments(parser: argparse.ArgumentParser) -> None:

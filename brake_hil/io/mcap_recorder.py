@@ -455,8 +455,8 @@ class McapRecorder:
             and log_time_ns - current.first_log_ns >= self._max_duration_ns
         ):
             self._split()
+            assert self._file is not None
             current = self._file
-            assert current is not None
             current.first_log_ns = log_time_ns
         publish = log_time_ns if publish_time_ns is None else publish_time_ns
         current.writer.add_message(current.channel_ids[handle], log_time_ns, data, publish)
@@ -532,6 +532,22 @@ class McapRecorder:
         if split and self._max_bytes is not None and current.stream.size >= self._max_bytes:
             self._split()
 
+    def start_next_file(self) -> None:
+        """Finish the open file now and go on in the next (``<name>_<i+1>.mcap``).
+
+        Raises:
+            RecordingWriteError: writing failed now or before (see the class doc).
+            ValueError: the recording is closed.
+        """
+        if self.failure is not None:
+            raise self.failure
+        if self._file is None:
+            raise ValueError(f"{self.path}: the recording is closed")
+        try:
+            self._split()
+        except OSError as err:
+            raise self._fail(err) from err
+
     def _split(self) -> None:
         """Close the current file and start the next."""
         self._finish_file()
@@ -584,6 +600,10 @@ class McapRecorder:
 
     def _write_metadata(self) -> None:
         self._prepare_metadata().replace(self.path / "metadata.yaml")
+
+    def topic_counts(self) -> dict[str, int]:
+        """Committed messages per topic name, every file so far."""
+        return {topic.name: self._counts.get(h, 0) for h, topic in enumerate(self.topics)}
 
     @property
     def message_count(self) -> int:

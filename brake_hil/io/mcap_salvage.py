@@ -13,14 +13,24 @@ ROS-free; the rosbag2 side (directories, ``metadata.yaml``) is
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 import struct
 from typing import Final, NamedTuple
 
 from mcap.exceptions import EndOfFile, McapError
-from mcap.records import Channel, Chunk, DataEnd, Footer, Header, Message, Metadata, Schema
+from mcap.records import (
+    Channel,
+    Chunk,
+    DataEnd,
+    Footer,
+    Header,
+    McapRecord,
+    Message,
+    Metadata,
+    Schema,
+)
 from mcap.stream_reader import StreamReader, breakup_chunk
 
 MAGIC: Final = b"\x89MCAP0\r\n"
@@ -144,7 +154,7 @@ def salvage_file(path: Path | str) -> SalvagedFile:
             found.read_bytes = end
 
 
-def _keep(found: SalvagedFile, record: object, inner: list[object]) -> None:
+def _keep(found: SalvagedFile, record: McapRecord, inner: Sequence[McapRecord]) -> None:
     """Add a data-section record (a chunk's content when it is a chunk) to ``found``."""
     for item in inner or [record]:
         if isinstance(item, Message):

@@ -21,11 +21,13 @@ import re
 from typing import Any, Final
 
 from mcap.reader import make_reader
+from mcap.records import Channel
 from rosbags.interfaces import (
     Connection,
     ConnectionExtRosbag2,
     MessageDefinition,
     MessageDefinitionFormat,
+    Qos,
     TopicInfo,
 )
 from rosbags.rosbag2.metadata import parse_qos
@@ -140,6 +142,15 @@ def unfinished_reason(path: Path) -> str | None:
     return None
 
 
+def offered_qos(channel: Channel) -> list[Qos]:
+    """A rosbag2 MCAP channel's ``offered_qos_profiles``; [] when absent or unreadable."""
+    text = channel.metadata.get("offered_qos_profiles", "")
+    try:
+        return list(parse_qos(yaml.safe_load(text) or [])) if text else []
+    except (yaml.YAMLError, KeyError, TypeError, ValueError, AttributeError):
+        return []
+
+
 def _connection_key(salvaged: SalvagedFile, channel_id: int) -> tuple[str, str, str, str, str]:
     channel = salvaged.channels[channel_id]
     schema = salvaged.schemas.get(channel.schema_id)
@@ -191,11 +202,7 @@ class SalvagedRecording:
     def _connection(self, salvaged: SalvagedFile, channel_id: int, number: int) -> Connection:
         channel = salvaged.channels[channel_id]
         schema = salvaged.schemas.get(channel.schema_id)
-        qos_text = channel.metadata.get("offered_qos_profiles", "")
-        try:
-            qos = parse_qos(yaml.safe_load(qos_text) or []) if qos_text else []
-        except (yaml.YAMLError, KeyError, TypeError, ValueError):
-            qos = []
+        qos = offered_qos(channel)
         msgdef = (
             MessageDefinition(MessageDefinitionFormat.MSG, schema.data.decode("utf-8", "replace"))
             if schema is not None and schema.encoding == "ros2msg"
