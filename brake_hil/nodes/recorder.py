@@ -15,6 +15,14 @@ executor is rclpy's EventsExecutor (~3 us per message; the default executor need
 too slow for 8 topics at 1 kHz). SIGINT/SIGTERM stop the subscriptions' executor, record
 what the middleware still holds (until 0.05 s without a message, at most 0.5 s: under steady
 traffic up to 0.5 s more is recorded), then finish the files.
+
+The open chunk is committed once it is ``flush_interval_s`` old (at the next message, or by a
+timer when none comes), so ``kill -9`` loses at most that span of messages plus what the
+middleware had not yet delivered. A failed write (disk full, file size limit, I/O error)
+stops the recording (:class:`~brake_hil.io.mcap_recorder.McapRecorder`: the file is cut back
+to its last whole chunk, every message written before stays readable): the node stops
+writing, publishes an ERROR status ``recorder`` on ``/diagnostics`` (the only status it
+publishes), closes the files as they stand, prints one line and exits with status 1.
 """
 
 from __future__ import annotations
@@ -25,9 +33,11 @@ import importlib
 from pathlib import Path
 import re
 import sys
+import threading
 import time
 from typing import Any
 
+from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rosbags.interfaces import (
@@ -39,6 +49,7 @@ from rosbags.interfaces import (
     QosTime,
 )
 
+from brake_hil.errors import RecordingWriteError
 from brake_hil.io.mcap_recorder import McapRecorder
 from brake_hil.nodes import common
 from brake_hil.nodes.settings import RecorderSettings
@@ -94,7 +105,15 @@ class RecorderNode(Node):
             max_file_bytes=settings.max_file_bytes or None,
             max_file_duration_s=settings.max_file_duration_s or None,
             chunk_bytes=settings.chunk_bytes,
+            max_chunk_age_s=settings.flush_interval_s,
             custom_data={"recorder": "brake_hil recorder"},
+        )
+        self.stop = threading.Event()
+        """Set when the node must end (a failed write)."""
+        self.write_error: RecordingWriteError | None = None
+        """Why writing stopped; None while healthy."""
+        self._diagnostics = self.create_publisher(
+            DiagnosticArray, common.DIAGNOSTICS_TOPIC, common.DIAGNOSTICS_QOS
         )
         self._pattern = topic_pattern(settings.topics)
         self._recorded: dict[str, Any] = {}
@@ -102,9 +121,38 @@ class RecorderNode(Node):
         self.get_logger().info(f"recording {list(settings.topics)} into {self.bag_path}")
         self._discover()
         self.create_timer(settings.discovery_interval_s, self._discover)
-        self.create_timer(settings.flush_interval_s, self._recorder.flush)
+        self.create_timer(settings.flush_interval_s, self._flush)
+
+    def _flush(self) -> None:
+        if self.write_error is not None:
+            return
+        try:
+            self._recorder.flush()
+        except RecordingWriteError as err:
+            self._stop_writing(err)
+
+    def _stop_writing(self, err: RecordingWriteError) -> None:
+        """Stop at the first failed write; :func:`main` reports it and ends the node."""
+        self.write_error = err
+        self.stop.set()
+
+    def report_write_error(self) -> None:
+        """Publish the failed write as an ERROR on ``/diagnostics`` and wait for the acks."""
+        if self.write_error is None:
+            return
+        on_disk = sum(f.message_count for f in self._recorder.files())
+        status = common.diagnostic_status(
+            "recorder",
+            common.ERROR,
+            f"recording stopped: {self.write_error}",
+            {"bag": str(self.bag_path), "messages_on_disk": on_disk},
+        )
+        self._diagnostics.publish(common.diagnostic_array(self, [status]))
+        common.wait_for_acks([self._diagnostics], timeout_s=2.0)
 
     def _discover(self) -> None:
+        if self.write_error is not None:
+            return
         for name, types in self.get_topic_names_and_types():
             if name in self._recorded or name in self._skipped:
                 continue
@@ -140,7 +188,12 @@ class RecorderNode(Node):
         write = self._recorder.write
 
         def on_message(data: bytes) -> None:
-            write(handle, time.time_ns(), data)
+            if self.write_error is not None:
+                return
+            try:
+                write(handle, time.time_ns(), data)
+            except RecordingWriteError as err:
+                self._stop_writing(err)
 
         self._recorded[name] = self.create_subscription(cls, name, on_message, qos, raw=True)
         self.get_logger().info(f"recording {name} ({msgtype})")
@@ -151,6 +204,8 @@ class RecorderNode(Node):
         Spin until nothing arrives for ``quiet_s`` (at most ``timeout_s``). Called after a stop
         signal, before :meth:`close`.
         """
+        if self.write_error is not None:
+            return
         executor = common.make_executor()
         executor.add_node(self)
         deadline = time.monotonic() + timeout_s
@@ -162,8 +217,21 @@ class RecorderNode(Node):
         executor.shutdown()
 
     def close(self) -> None:
-        """Finish the recording: last chunk, summaries, ``metadata.yaml``."""
-        self._recorder.close()
+        """Finish the recording: last chunk, summaries, ``metadata.yaml``.
+
+        After a failed write the files are closed as they stand (nothing raised); a write
+        that fails while finishing is reported as in :meth:`report_write_error`.
+        """
+        failed_before = self.write_error is not None
+        try:
+            self._recorder.close()
+        except RecordingWriteError as err:
+            self.write_error = err
+            self.report_write_error()
+            print(f"recorder: error: {err}", file=sys.stderr)
+            return
+        if failed_before:
+            return
         files = ", ".join(f.path.name for f in self._recorder.files())
         self.get_logger().info(
             f"closed {self.bag_path}: {self._recorder.message_count} messages in {files}"
@@ -174,12 +242,25 @@ def main(args: list[str] | None = None) -> int:
     """Entry point ``recorder``: record until SIGINT/SIGTERM, then drain and finish."""
 
     def run(node: RecorderNode) -> bool:
-        common.spin_until_signal(node)
+        healthy = common.spin_until_signal(node, node.stop)
+        if node.write_error is not None:
+            node.report_write_error()
+            print(f"recorder: error: {node.write_error}", file=sys.stderr)
+            return False
         node.drain()
-        return True
+        return healthy
+
+    nodes: list[RecorderNode] = []
+
+    def make_node() -> RecorderNode:
+        nodes.append(RecorderNode())
+        return nodes[-1]
 
     # OSError, ValueError: the bag exists, the directory is not writable.
-    return common.run_node("recorder", args, RecorderNode, (OSError, ValueError), run)
+    status = common.run_node("recorder", args, make_node, (OSError, ValueError), run)
+    if status == 0 and nodes and nodes[0].write_error is not None:
+        return 1  # the last chunk or the summary could not be written at the end
+    return status
 
 
 if __name__ == "__main__":

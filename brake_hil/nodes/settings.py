@@ -237,8 +237,9 @@ _THRESHOLD_NAMES = tuple(item.name for item in fields(Thresholds))
 class RecorderSettings:
     """Parameters of the ``recorder`` node (``config/recorder.yaml``).
 
-    ``flush_interval_s`` bounds what ``kill -9`` loses (or ``chunk_bytes``); ``qos_depth``
-    of 5000 is 5 s at 1 kHz, Fast DDS's default per-reader sample limit.
+    ``flush_interval_s`` bounds what ``kill -9`` loses (the open chunk is committed once it
+    is that old, or at ``chunk_bytes``); ``qos_depth`` of 5000 is 5 s at 1 kHz, Fast DDS's
+    default per-reader sample limit.
     """
 
     output_dir: str = parameter("bags", "the recording directory is made here")
@@ -253,7 +254,9 @@ class RecorderSettings:
     chunk_bytes: int = parameter(
         1 << 20, "MCAP chunk (uncompressed), the unit that reaches the disk", "bytes"
     )
-    flush_interval_s: float = parameter(1.0, "commit the open chunk at least this often", "s")
+    flush_interval_s: float = parameter(
+        0.1, "commit the open chunk once it is this old: what kill -9 loses at most", "s"
+    )
     discovery_interval_s: float = parameter(
         0.2, "search the ROS graph for new topics this often", "s"
     )
