@@ -147,9 +147,30 @@ def test_truncated_bag_exits_2(recording: Path, tmp_path: Path) -> None:
     shutil.copytree(recording, broken)
     mcap = next(broken.glob("*.mcap"))
     data = mcap.read_bytes()
-    mcap.write_bytes(data[: len(data) // 2])
+    mcap.write_bytes(data[:2000])  # not one whole chunk left
     line = _single_error_line(brake_hil("compare", broken, "--rig", RIG))
-    assert "broken" in line
+    assert "broken" in line and "not one whole chunk" in line
+
+
+def test_a_cut_bag_is_compared_on_its_whole_chunks_and_says_so(
+    recording: Path, tmp_path: Path
+) -> None:
+    cut = tmp_path / "cut"
+    shutil.copytree(recording, cut)
+    mcap = next(cut.glob("*.mcap"))
+    data = mcap.read_bytes()
+    mcap.write_bytes(data[: len(data) * 9 // 10])  # a writer killed near the end
+    result = brake_hil("compare", cut, "--rig", RIG)
+    assert result.returncode == 0, result.stderr
+    (note,) = result.stderr.strip().splitlines()
+    assert note.startswith(f"{cut}: unfinished recording") and "recovered" in note
+    assert "NRMSE" in result.stdout or "nrmse" in result.stdout.lower()
+    recovered = brake_hil("recover", cut, "--out", tmp_path / "copy")
+    assert recovered.returncode == 0, recovered.stderr
+    assert "unfinished" in recovered.stdout.splitlines()[0]
+    again = brake_hil("compare", tmp_path / "copy", "--rig", RIG)
+    assert again.returncode == 0 and again.stderr == ""  # the copy is finished
+    assert again.stdout == result.stdout.replace(str(cut), str(tmp_path / "copy"))
 
 
 def test_missing_topic_exits_2_listing_what_is_there(tmp_path: Path, default_rig: Rig) -> None:

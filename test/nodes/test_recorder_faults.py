@@ -219,6 +219,6 @@ def test_a_killed_split_recording_is_read_and_recovered(tmp_path: Path) -> None:
             assert count == summary.statistics.message_count
             total += count
     assert total == result.message_count
-    with Reader(copy) as reader:
-        assert {t: i.msgcount for t, i in reader.topics.items()} == lengths
-        assert sum(1 for _ in reader.messages()) == reader.message_count == total
+    with Reader(copy) as bag_reader:
+        assert {t: i.msgcount for t, i in bag_reader.topics.items()} == lengths
+        assert sum(1 for _ in bag_reader.messages()) == bag_reader.message_count == total
