@@ -76,6 +76,7 @@ class Source:
         self.stop = threading.Event()
 
     def wait_for_recorder(self, timeout_s: float = 30.0) -> None:
+        """Wait until the recorder subscribed to every topic."""
         publishers = [p for p, _ in self.outputs] + [self.diagnostics]
         deadline = time.monotonic() + timeout_s
         while not all(p.get_subscription_count() for p in publishers):
@@ -84,6 +85,7 @@ class Source:
             time.sleep(0.05)
 
     def run(self) -> None:
+        """Publish at 1 kHz on absolute deadlines until :attr:`stop` is set."""
         array = DiagnosticArray()
         array.status = [DiagnosticStatus(name="bench", message="")]
         start = time.monotonic_ns() + 1_000_000
@@ -101,6 +103,7 @@ class Source:
             self.published = k
 
     def close(self) -> None:
+        """Stop and shut this node's context down."""
         self.stop.set()
         self.node.destroy_node()
         rclpy.shutdown(context=self.context)
