@@ -12,12 +12,20 @@ to the file together with a temporary MCAP footer (no summary) by one ``pwrite``
 of the previous temporary footer. The file on disk therefore always ends after a whole chunk
 with a valid footer: after ``kill -9`` every file is a complete MCAP without summary, which
 rosbags and ``mcap`` read by scanning. Only the chunk in memory is lost (at most
-``chunk_bytes`` of messages, or ``flush()``'s interval when the caller flushes on a timer).
+``chunk_bytes`` of messages, or ``max_chunk_age_s`` of them when the caller also calls
+``flush()`` on a timer of that period).
 ``metadata.yaml`` is rewritten (write-then-rename) after every commit with the counts now on
 disk and every file so far, so a killed recording opens as it stands. A kill between the
 chunk's ``pwrite`` and the rename (microseconds) leaves counts one chunk short;
 :func:`recover_metadata` rewrites ``metadata.yaml`` from the files, as ``ros2 bag reindex``
 does.
+
+Write errors. When a write fails (disk full, a file size limit, an I/O error) the file is cut
+back to its last whole chunk and temporary footer, ``metadata.yaml`` keeps the counts of that
+commit, and the recording stops with :class:`~brake_hil.errors.RecordingWriteError`, which
+names the file, the system's reason and how many messages are on disk: every one of them
+reads back. :mod:`brake_hil.io.unfinished` reads such a recording, ``brake-hil recover``
+writes a finished copy of it.
 
 Messages are written as given (no decoding); log time is whatever the caller passes (a
 recorder passes the receive time; ``header.stamp`` stays inside the message).
