@@ -181,6 +181,9 @@ class RecorderNode(Node):
         )
         try:
             handle = self._recorder.add_topic(name, msgtype, offered_qos_profiles=offered)
+        except RecordingWriteError as err:
+            self._stop_writing(err)
+            return
         except ValueError as err:
             self.get_logger().warning(f"not recording {name}: {err}")
             self._skipped.add(name)
@@ -243,11 +246,12 @@ def main(args: list[str] | None = None) -> int:
 
     def run(node: RecorderNode) -> bool:
         healthy = common.spin_until_signal(node, node.stop)
+        if node.write_error is None:
+            node.drain()
         if node.write_error is not None:
             node.report_write_error()
             print(f"recorder: error: {node.write_error}", file=sys.stderr)
             return False
-        node.drain()
         return healthy
 
     nodes: list[RecorderNode] = []
