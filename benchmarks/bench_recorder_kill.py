@@ -6,8 +6,18 @@ of interface.md and ``/diagnostics`` at 1 kHz from this process (7 000 messages/
 ``SIGKILL`` the recorder at a random moment 1.5-3.5 s into the stream. Lost = published
 before the kill - recovered from the files (every whole chunk, read as the project's reader
 reads an unfinished recording), per topic; reported as the maximum over the topics of each
-run, then median / p95 / max over the runs, in messages and in ms of a 1 kHz topic. Also the
-recorder's CPU while recording (``/proc``, user + system over the publishing time).
+run, then median / p95 / max over the runs, in messages and in ms of a 1 kHz topic.
+
+The loss has two parts, measured apart on the recorder's own clock (a message's log time is
+when the recorder received it; same host clock as this script's):
+
+* *open chunk*: kill time - the newest log time on disk: received but not yet committed, the
+  part ``flush_interval_s`` and ``chunk_bytes`` bound;
+* *backlog*: that newest message's log time - its publish time: how far behind the
+  publisher the recorder was (DDS had not yet delivered it; 0 on an idle machine, grows when
+  other work starves the recorder of CPU).
+
+Also the recorder's CPU while recording (``/proc``, user + system over the publishing time).
 
 Run from the repository root (not in CI; about 5 s a kill)::
 
@@ -73,6 +83,7 @@ class Source:
             DiagnosticArray, "/diagnostics", common.DIAGNOSTICS_QOS
         )
         self.published = 0
+        self.publish_ns: list[int] = []  # wall clock when sample k was published
         self.stop = threading.Event()
 
     def wait_for_recorder(self, timeout_s: float = 30.0) -> None:
@@ -95,6 +106,7 @@ class Source:
             if delay > 0:
                 time.sleep(delay / 1e9)
             stamp = T0 + k * 1_000_000
+            self.publish_ns.append(time.time_ns())
             for publisher, build in self.outputs:
                 publisher.publish(build(stamp, float(k)))
             array.status[0].message = str(k)
@@ -143,6 +155,7 @@ def one_kill(
         thread.start()
         time.sleep(rng.uniform(1.5, 3.5))
         cpu = cpu_seconds(process.pid) - cpu_before
+        killed_ns = time.time_ns()
         process.send_signal(signal.SIGKILL)
         published = source.published
         wall = time.monotonic() - began
@@ -155,17 +168,25 @@ def one_kill(
             process.wait(10)
         source.close()
     recovered: dict[str, int] = {}
+    newest: tuple[int, int] = (0, 0)  # (log time, k) of the newest sample on disk
+    readers = {spec.name: common.raw_reader(spec) for spec in TOPICS}
     for file in sorted((out / "bag").glob("*.mcap")):
         salvaged = salvage_file(file)
         for message in salvaged.messages:
             topic = salvaged.channels[message.channel_id].topic
             recovered[topic] = recovered.get(topic, 0) + 1
+            if topic in readers and message.log_time_ns > newest[0]:
+                stamp, _ = readers[topic](message.data)
+                newest = (message.log_time_ns, (stamp - T0) // 1_000_000)
     names = [s.name for s in TOPICS] + ["/diagnostics"]
     lost = {name: published - recovered.get(name, 0) for name in names}
+    log_ns, k = newest
     return {
         "published": published,
         "lost_max": max(lost.values()),
         "lost_min": min(lost.values()),
+        "open_chunk_ms": (killed_ns - log_ns) / 1e6 if log_ns else float("nan"),
+        "backlog_ms": (log_ns - source.publish_ns[k]) / 1e6 if log_ns else float("nan"),
         "cpu_percent": 100.0 * cpu / wall,
     }
 
@@ -181,8 +202,9 @@ def main() -> None:
     results: list[dict[str, Any]] = []
     print(f"{args.kills} kills per setting, 7 topics at 1 kHz; lost = max over the topics")
     print(
-        f"{'chunk_bytes':>11} {'flush_s':>7} | {'lost median':>11} {'p95':>6} {'max':>6}"
-        f" (messages of one topic = ms) | {'recorder CPU %':>14}"
+        f"{'chunk_bytes':>11} {'flush_s':>7} | {'lost median':>11} {'p95':>5} {'max':>5} |"
+        f" {'open chunk ms median':>20} {'p95':>5} {'max':>5} |"
+        f" {'backlog ms median':>17} {'p95':>5} {'max':>5} | {'CPU %':>5}"
     )
     for chunk_bytes, flush_s in SETTINGS:
         runs = []
@@ -190,22 +212,22 @@ def main() -> None:
             with tempfile.TemporaryDirectory(prefix="kill_bench_") as tmp:
                 domain = 101 + (os.getpid() + 17 * kill + int(flush_s * 1000)) % 100
                 runs.append(one_kill(Path(tmp), domain, chunk_bytes, flush_s, rng))
-        lost = np.array([r["lost_max"] for r in runs])
-        cpu = np.array([r["cpu_percent"] for r in runs])
-        row = {
-            "chunk_bytes": chunk_bytes,
-            "flush_interval_s": flush_s,
-            "lost_median": float(np.median(lost)),
-            "lost_p95": float(np.percentile(lost, 95)),
-            "lost_max": int(lost.max()),
-            "cpu_percent_median": float(np.median(cpu)),
-            "runs": runs,
-        }
+        row: dict[str, Any] = {"chunk_bytes": chunk_bytes, "flush_interval_s": flush_s}
+        cells = []
+        for key in ("lost_max", "open_chunk_ms", "backlog_ms"):
+            values = np.array([r[key] for r in runs], dtype=float)
+            figures = np.median(values), np.percentile(values, 95), values.max()
+            row[key] = dict(zip(("median", "p95", "max"), map(float, figures), strict=True))
+            cells.append(figures)
+        row["cpu_percent_median"] = float(np.median([r["cpu_percent"] for r in runs]))
+        row["runs"] = runs
         results.append(row)
+        (lost, opened, backlog) = cells
         print(
-            f"{chunk_bytes:>11} {flush_s:>7.2f} | {row['lost_median']:>11.0f} "
-            f"{row['lost_p95']:>6.0f} {row['lost_max']:>6d}"
-            f"{'':29} | {row['cpu_percent_median']:>14.1f}",
+            f"{chunk_bytes:>11} {flush_s:>7.2f} | {lost[0]:>11.0f} {lost[1]:>5.0f} "
+            f"{lost[2]:>5.0f} | {opened[0]:>20.0f} {opened[1]:>5.0f} {opened[2]:>5.0f} | "
+            f"{backlog[0]:>17.0f} {backlog[1]:>5.0f} {backlog[2]:>5.0f} | "
+            f"{row['cpu_percent_median']:>5.1f}",
             flush=True,
         )
     if args.json:
