@@ -93,6 +93,15 @@ def _inputs(bag: Path) -> list[Path]:
     return files
 
 
+def _missing_files(bag: Path) -> str | None:
+    """Files ``metadata.yaml`` lists that are not on disk (they cannot be recovered)."""
+    info = bag_metadata(bag) if bag.is_dir() else None
+    names = [Path(str(n)).name for n in (info or {}).get("relative_file_paths") or []]
+    if missing := [n for n in names if not (bag / n).exists()]:
+        return f"metadata.yaml lists {', '.join(missing)}, not on disk"
+    return None
+
+
 def _check_output(bag: Path, out: Path) -> None:
     if out.exists() or out.is_symlink():
         problem = "exists already; recover never overwrites, pass another --out"
@@ -162,7 +171,7 @@ def run_recover(bag: Path | str, out: Path | str | None = None) -> RecoverResult
     inputs = _inputs(bag)
     target = Path(out) if out is not None else default_output(bag)
     _check_output(bag, target)
-    reason = unfinished_reason(bag)
+    reason = unfinished_reason(bag) or _missing_files(bag)
     info = bag_metadata(bag) if bag.is_dir() else None
     custom = {str(k): str(v) for k, v in ((info or {}).get("custom_data") or {}).items()}
     custom["recovered_from"] = str(bag)

@@ -125,7 +125,13 @@ def test_metadata_missing_or_stale_is_rebuilt_from_the_files(tmp_path: Path) -> 
     info["rosbag2_bagfile_information"]["relative_file_paths"].pop()  # one file unlisted
     info["rosbag2_bagfile_information"]["message_count"] = 7
     (stale / "metadata.yaml").write_text(yaml.safe_dump(info))
+    gone = tmp_path / "gone"
+    shutil.copytree(killed, gone)
+    (gone / "bag_1.mcap").unlink()
     (killed / "metadata.yaml").unlink()
+    result = run_recover(gone)
+    assert result.reason == "metadata.yaml lists bag_1.mcap, not on disk"
+    assert len(result.files) == len(list(gone.glob("*.mcap")))
     for bag in (killed, stale):
         result = run_recover(bag)
         assert result.output == tmp_path / f"{bag.name}_recovered"
