@@ -197,7 +197,17 @@ def main() -> None:
     parser.add_argument("--kills", type=int, default=20)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--json", type=Path)
+    parser.add_argument(
+        "--setting",
+        action="append",
+        metavar="CHUNK_BYTES:FLUSH_S",
+        help="run only these settings (repeatable); default: the four of the table",
+    )
     args = parser.parse_args()
+    settings = SETTINGS
+    if args.setting:
+        pairs = [text.split(":") for text in args.setting]
+        settings = tuple((int(chunk), float(flush)) for chunk, flush in pairs)
     rng = random.Random(args.seed)
     results: list[dict[str, Any]] = []
     print(f"{args.kills} kills per setting, 7 topics at 1 kHz; lost = max over the topics")
@@ -206,7 +216,7 @@ def main() -> None:
         f" {'open chunk ms median':>20} {'p95':>5} {'max':>5} |"
         f" {'backlog ms median':>17} {'p95':>5} {'max':>5} | {'CPU %':>5}"
     )
-    for chunk_bytes, flush_s in SETTINGS:
+    for chunk_bytes, flush_s in settings:
         runs = []
         for kill in range(args.kills):
             with tempfile.TemporaryDirectory(prefix="kill_bench_") as tmp:

@@ -15,17 +15,18 @@ rosbags and ``mcap`` read by scanning. Only the chunk in memory is lost (at most
 ``chunk_bytes`` of messages, or ``max_chunk_age_s`` of them when the caller also calls
 ``flush()`` on a timer of that period).
 ``metadata.yaml`` is rewritten (write-then-rename) after every commit with the counts now on
-disk and every file so far, so a killed recording opens as it stands. A kill between the
+disk and every file so far (with ``metadata_interval_s``, at most that often, and whenever
+a file starts or closes), so a killed recording opens as it stands. A kill between the
 chunk's ``pwrite`` and the rename (microseconds) leaves counts one chunk short;
 :func:`recover_metadata` rewrites ``metadata.yaml`` from the files, as ``ros2 bag reindex``
 does.
 
 Write errors. When a write fails (disk full, a file size limit, an I/O error) the file is cut
-back to its last whole chunk and temporary footer, ``metadata.yaml`` keeps the counts of that
-commit, and the recording stops with :class:`~brake_hil.errors.RecordingWriteError`, which
-names the file, the system's reason and how many messages are on disk: every one of them
-reads back. :mod:`brake_hil.io.unfinished` reads such a recording, ``brake-hil recover``
-writes a finished copy of it.
+back to its last whole chunk and temporary footer, and the recording stops with
+:class:`~brake_hil.errors.RecordingWriteError`, which names the file, the system's reason
+and how many messages are on disk: every one of them reads back.
+:mod:`brake_hil.io.unfinished` reads such a recording, ``brake-hil recover`` writes a
+finished copy of it.
 
 Messages are written as given (no decoding); log time is whatever the caller passes (a
 recorder passes the receive time; ``header.stamp`` stays inside the message).
@@ -308,17 +309,21 @@ class McapRecorder:
             :meth:`flush` commit. With a timer calling :meth:`flush` at the same interval,
             ``kill -9`` loses at most this span of messages (plus what the caller had not
             yet passed to :meth:`write`).
+        metadata_interval_s: rewrite ``metadata.yaml`` at a chunk commit only when the last
+            rewrite is this long ago (s); None: at every commit. It is always rewritten when
+            a file starts or closes, so it lists every file; between rewrites its counts lag
+            (the project's reader and ``brake-hil recover`` count the files themselves).
         compression: ``"zstd"``, ``"lz4"`` or ``"none"`` (chunk compression).
         custom_data: ``custom_data`` of ``metadata.yaml`` (strings).
         typestore: where message definitions and hashes come from (default ROS 2 Kilted).
 
     A failed write (disk full, file size limit, I/O error) stops the recording: the file is
     cut back to its last whole chunk and temporary footer (a valid MCAP without summary, every
-    committed message readable), ``metadata.yaml`` keeps the counts of that commit, the
-    pending chunk is dropped, and :meth:`write` and :meth:`flush` raise
-    :class:`~brake_hil.errors.RecordingWriteError` (also kept in :attr:`failure`) from then
-    on; :meth:`close` then closes the file without a summary (``brake-hil recover`` writes a
-    finished copy).
+    committed message readable), the pending chunk is dropped, ``metadata.yaml`` keeps its
+    last counts (rewritten with those on disk at :meth:`close` when the disk allows), and
+    :meth:`write` and :meth:`flush` raise :class:`~brake_hil.errors.RecordingWriteError`
+    (also kept in :attr:`failure`) from then on; :meth:`close` then closes the file without
+    a summary (``brake-hil recover`` writes a finished copy).
 
     Raises:
         FileExistsError: ``path`` exists.
@@ -333,6 +338,7 @@ class McapRecorder:
         max_file_duration_s: float | None = None,
         chunk_bytes: int = 1 << 20,
         max_chunk_age_s: float | None = None,
+        metadata_interval_s: float | None = None,
         compression: str = "zstd",
         custom_data: Mapping[str, str] | None = None,
         typestore: Typestore | None = None,
@@ -357,6 +363,8 @@ class McapRecorder:
         )
         self._chunk_bytes = chunk_bytes
         self._max_chunk_age_ns = None if max_chunk_age_s is None else round(max_chunk_age_s * 1e9)
+        self._metadata_interval_s = metadata_interval_s
+        self._metadata_written = -float("inf")  # monotonic time of the last rewrite (s)
         self.failure: RecordingWriteError | None = None
         """Why writing stopped; None while the recording is healthy."""
         self._custom_data = dict(custom_data or {})
@@ -530,13 +538,20 @@ class McapRecorder:
         for handle, count in current.pending.per_topic.items():
             self._counts[handle] = self._counts.get(handle, 0) + count
         current.pending = _Counts()
+        now = time.monotonic()
+        rewrite = (
+            self._metadata_interval_s is None
+            or now - self._metadata_written >= self._metadata_interval_s
+        )
         try:
-            tmp = self._prepare_metadata(size=current.stream.tell())
+            tmp = self._prepare_metadata(size=current.stream.tell()) if rewrite else None
             current.stream.commit()
         except OSError:
             current.committed, self._counts, current.pending = saved
             raise
-        tmp.replace(self.path / "metadata.yaml")
+        if tmp is not None:
+            tmp.replace(self.path / "metadata.yaml")
+            self._metadata_written = now
         if split and self._max_bytes is not None and current.stream.size >= self._max_bytes:
             self._split()
 

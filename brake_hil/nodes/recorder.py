@@ -106,6 +106,7 @@ class RecorderNode(Node):
             max_file_duration_s=settings.max_file_duration_s or None,
             chunk_bytes=settings.chunk_bytes,
             max_chunk_age_s=settings.flush_interval_s,
+            metadata_interval_s=settings.metadata_interval_s or None,
             custom_data={"recorder": "brake_hil recorder"},
         )
         self.stop = threading.Event()

@@ -257,6 +257,9 @@ class RecorderSettings:
     flush_interval_s: float = parameter(
         0.1, "commit the open chunk once it is this old: what kill -9 loses at most", "s"
     )
+    metadata_interval_s: float = parameter(
+        1.0, "rewrite metadata.yaml at most this often while recording; 0: every chunk", "s"
+    )
     discovery_interval_s: float = parameter(
         0.2, "search the ROS graph for new topics this often", "s"
     )
