@@ -19,12 +19,12 @@ traffic up to 0.5 s more is recorded), then finish the files.
 The open chunk is committed once it is ``flush_interval_s`` old (at the next message, or by a
 timer when none comes), so ``kill -9`` loses at most that span of messages plus what the
 middleware had not yet delivered; ``metadata.yaml`` is rewritten at most every
-``metadata_interval_s`` (readers of a killed recording count its files themselves). A failed
-write (disk full, file size limit, I/O error)
-stops the recording (:class:`~brake_hil.io.mcap_recorder.McapRecorder`: the file is cut back
-to its last whole chunk, every message written before stays readable): the node stops
-writing, publishes an ERROR status ``recorder`` on ``/diagnostics`` (the only status it
-publishes), closes the files as they stand, prints one line and exits with status 1.
+``metadata_interval_s`` (readers of a killed recording count its files themselves). A
+failed write (disk full, file size limit, I/O error) stops the recording
+(:class:`~brake_hil.io.mcap_recorder.McapRecorder`: the file is cut back to its last whole
+chunk, every message written before stays readable): the node stops writing, publishes an
+ERROR status ``recorder`` on ``/diagnostics`` (the only status it publishes), closes the
+files as they stand, prints one line and exits with status 1.
 """
 
 from __future__ import annotations
