@@ -7,6 +7,7 @@
      +-- RecordingError (ValueError)        a recording cannot be used
      |    +-- MissingTopicError             a required topic is absent
      +-- SignalError (ValueError)           a signal is too short or not periodic
+     |    +-- NoSteadyPulsingError          no steady 5 Hz pulsing to score
      +-- ModelFileError (ValueError)        a model file is missing or of an unknown kind
      +-- ImprovedModelError (ValueError)    an improved_model.json is malformed
      +-- BaselineError (ValueError)         a regression baseline is missing or malformed
@@ -39,6 +40,7 @@ __all__ = [
     "ImprovedModelError",
     "MissingTopicError",
     "ModelFileError",
+    "NoSteadyPulsingError",
     "RecordingError",
     "RigError",
     "SignalError",
@@ -65,6 +67,10 @@ class MissingTopicError(RecordingError):
 
 class SignalError(BrakeHilError, ValueError):
     """A signal cannot be analysed (too short, no steady periodic segment, ...)."""
+
+
+class NoSteadyPulsingError(SignalError):
+    """A recording holds no steady 5 Hz pulsing (a ramp, a sweep): nothing to score."""
 
 
 class ModelFileError(BrakeHilError, ValueError):
