@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 import shutil
+import re
 import subprocess
 import sys
 
@@ -28,13 +29,14 @@ from test.conftest import CONFIG, PEER_DATA
 RIG = CONFIG / "rig_default.yaml"
 
 
-def brake_hil(*args: str | Path) -> subprocess.CompletedProcess[str]:
+def brake_hil(*args: str | Path, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
     """Run the console entry point as a user would, in a fresh interpreter."""
     return subprocess.run(
         [sys.executable, "-m", "brake_hil.cli", *map(str, args)],
         capture_output=True,
         text=True,
         timeout=120,
+        cwd=cwd,
     )
 
 
@@ -253,8 +255,21 @@ def test_diagnose_on_a_parameter_error_only_finds_no_missing_physics(tmp_path: P
         "4",
     )
     assert made.returncode == 0, made.stderr
-    result = brake_hil("diagnose", bag, "--rig", RIG, "--out", tmp_path / "d")
+    (tmp_path / "rec.rig.yaml").write_text(RIG.read_text())  # the rig file beside the bag
+    # Without --rig and --out: RECORDING.rig.yaml beside it, out/<recording name>/.
+    result = brake_hil("diagnose", "rec/", cwd=tmp_path)
     assert result.returncode == 0, result.stderr
+    assert "rig file: rec.rig.yaml (beside the recording" in result.stdout
+    assert "output folder: out/rec (" in result.stdout
+    # stderr is no terminal: progress as lines (no carriage returns), never past its total.
+    assert "\r" not in result.stderr
+    steps = [
+        tuple(map(int, m))
+        for m in re.findall(r"diagnose: +\d+%\|[^|]*\| (\d+)/(\d+)", result.stderr)
+    ]
+    assert steps and all(done <= total for done, total in steps), result.stderr
+    assert steps[-1][0] == steps[-1][1]
+    (tmp_path / "d").symlink_to(tmp_path / "out" / "rec")
     diagnosis = json.loads((tmp_path / "d" / "diagnosis.json").read_text())
     assert diagnosis["verdict"]["effects"] == []
     assert set(diagnosis["baseline"]["metrics"]) == {"p_b", "F_k", "x_c"}
