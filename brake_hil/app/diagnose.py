@@ -59,5 +59,5 @@ def run_diagnose(
     improved = diagnosis.improved_model(rig_path).save(out / "improved_model.json")
     if progress is not None:
         progress("writing the report")
-    page = write_report(diagnosis, out)
+    page = write_report(diagnosis, out, rig_path)
     return DiagnoseResult(diagnosis, json_path, improved, page)

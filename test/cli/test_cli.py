@@ -4,20 +4,22 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-import shutil
 import re
+import shutil
 import subprocess
 import sys
 
 import numpy as np
 import pytest
 
+from brake_hil import __version__
 from brake_hil.analysis.comparison import predict
 from brake_hil.io.recording_writer import write_recording
 from brake_hil.physics.catalogue import effect_names
 from brake_hil.physics.excitation import pulsing_profile
 from brake_hil.physics.parameters import derive_parameters
 from brake_hil.physics.rig import Rig
+from brake_hil.report.diagnosis_report import NRMSE_DEFINITION
 from brake_hil.topics import (
     BLOCK_FORCE,
     BORE_PRESSURE,
@@ -279,6 +281,27 @@ def test_diagnose_on_a_parameter_error_only_finds_no_missing_physics(tmp_path: P
     assert multipliers["caliper_stiffness"] == pytest.approx(3.4e7 / 4.0e7, rel=0.03)
     for name in ("report.html", "improved_model.json", "held_out.png", "harmonics.png"):
         assert (tmp_path / "d" / name).stat().st_size > 500, name
+    _check_report(tmp_path / "d" / "report.html")
+
+
+def _check_report(page: Path) -> None:
+    """What a reader of report.html must find (issue 12)."""
+    text = page.read_text()
+    assert text.count(NRMSE_DEFINITION) == 1  # one NRMSE, defined once
+    assert "fits' measure, not the seed's per-cycle NRMSE" in text  # the other is not NRMSE
+    assert "``" not in text
+    assert text.index("In short") < text.index("Seed metrics") < text.index("Hypotheses")
+    assert "rec.rig.yaml" in text and f"brake_hil {__version__}" in text
+    assert re.search(r"\(1[0-9]\.\d s\)", text)  # the recording's length
+    # The top row (best held-out fit) is not the verdict (none): the page says why.
+    assert "Why the top row is not the verdict:" in text
+    images = re.findall(r'<img src="([^"]+)"', text)
+    assert len(images) == 4
+    for name in images:
+        png = (page.parent / name).read_bytes()
+        assert png[:8] == b"\x89PNG\r\n\x1a\n", name
+        width = int.from_bytes(png[16:20], "big")
+        assert width >= 900, (name, width)  # 130 dpi: readable legends
 
 
 @pytest.mark.parametrize("command", ["diagnose", "benchmark"])
