@@ -102,9 +102,14 @@ def diagnose(args: argparse.Namespace) -> int:
     if args.out is None:
         print(f"output folder: {out} (--out to choose another)")
     sys.stdout.flush()
-    with progress_bar(DIAGNOSIS_STEPS, "diagnose", "step") as bar:
+    with ExitStack() as stack:
+        bars: list[tqdm] = []  # type: ignore[type-arg]  # made at the first step: bad input
+        # before it leaves the one error line alone on stderr
 
         def progress(message: str) -> None:
+            if not bars:
+                bars.append(stack.enter_context(progress_bar(DIAGNOSIS_STEPS, "diagnose", "step")))
+            bar = bars[0]
             if message.startswith("left out"):
                 bar.write(f"diagnose: {message}", file=sys.stderr)
                 return
@@ -114,8 +119,9 @@ def diagnose(args: argparse.Namespace) -> int:
             bar.update(1)
 
         result = run_diagnose(args.recording, rig, out, progress)
-        bar.n = bar.total
-        bar.set_postfix_str("done")
+        if bars:
+            bars[0].n = bars[0].total
+            bars[0].set_postfix_str("done")
     diagnosis = result.diagnosis
     _json_written(result.json_path)
     print(f"improved model written to {result.improved_model_path} (caliper_model loads it)")
@@ -215,9 +221,16 @@ def benchmark(args: argparse.Namespace) -> int:
     """
     from brake_hil.app.benchmark import case_count, run_benchmark
 
-    with progress_bar(case_count(args.directory), "benchmark", "case") as bar:
+    with ExitStack() as stack:
+        bars: list[tqdm] = []  # type: ignore[type-arg]
+
+        def start() -> None:  # once the cases are known to exist: bad input stays one line
+            bars.append(stack.enter_context(progress_bar(count, "benchmark", "case")))
 
         def show(result: CaseResult) -> None:
+            if not bars:
+                start()
+            bar = bars[0]
             verdict = ", ".join(result.effects) or "none"
             bar.write(
                 f"case {result.case}: {verdict} ({result.confidence:.2f}, {result.seconds:.1f} s)"
@@ -227,6 +240,9 @@ def benchmark(args: argparse.Namespace) -> int:
             sys.stdout.flush()
             bar.update(1)
 
+        count = case_count(args.directory)
+        if count and (args.directory / "labels.json").is_file():
+            start()
         result = run_benchmark(args.directory, args.jobs, args.json, show)
     figures = result.figures
     rows = [

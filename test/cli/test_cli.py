@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import html
 import json
 from pathlib import Path
 import re
@@ -286,7 +287,7 @@ def test_diagnose_on_a_parameter_error_only_finds_no_missing_physics(tmp_path: P
 
 def _check_report(page: Path) -> None:
     """What a reader of report.html must find (issue 12)."""
-    text = page.read_text()
+    text = html.unescape(page.read_text())
     assert text.count(NRMSE_DEFINITION) == 1  # one NRMSE, defined once
     assert "fits' measure, not the seed's per-cycle NRMSE" in text  # the other is not NRMSE
     assert "``" not in text

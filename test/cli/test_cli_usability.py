@@ -112,3 +112,20 @@ def test_progress_off_a_terminal_is_whole_lines_never_past_the_total() -> None:
     lines = text.splitlines()
     assert lines and all(line.startswith("work:") for line in lines)
     assert "3/3" in lines[-1]
+
+
+def test_benchmark_of_one_null_case_shows_progress_and_n_a_for_empty_categories(
+    tmp_path: Path,
+) -> None:
+    made = _run(
+        "-m", "brake_hil.cli", "cases", "--out", str(tmp_path), "--count", "1", "--seed", "5",
+        "--kind", "null", "--pulsing-seconds", "2",
+    )  # fmt: skip
+    assert made.returncode == 0, made.stderr
+    done = _run("-m", "brake_hil.cli", "benchmark", str(tmp_path))
+    assert done.returncode == 0, done.stderr
+    assert "nan" not in done.stdout
+    single = next(line for line in done.stdout.splitlines() if line.startswith("top-1"))
+    assert "n/a" in single and "of 0 cases" in single
+    assert "benchmark:" in done.stderr and "1/1" in done.stderr  # progress, on stderr
+    assert "\r" not in done.stderr
