@@ -251,8 +251,9 @@ def benchmark(args: argparse.Namespace) -> int:
         ("false-positive rate, null cases", "false_positive_rate_null", "null_cases"),
         ("unexplained recall", "unexplained_recall", "unexplained_cases"),
     ]
-    for text, key, count in rows:
-        print(f"{text:40s}{_figure(figures[key], 100.0, '6.1f', ' %')}  of {figures[count]} cases")
+    for text, key, cases_key in rows:
+        share = _figure(figures[key], 100.0, "6.1f", " %")
+        print(f"{text:40s}{share}  of {figures[cases_key]} cases")
     improvement = _figure(figures["held_out_nrmse_improvement_median"], 1.0, "6.2f", " x")
     print(f"{'held-out NRMSE improvement, median':40s}{improvement}")
     mean = _figure(figures["seconds_per_recording_mean"], 1.0, "6.1f")
