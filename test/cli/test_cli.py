@@ -293,7 +293,7 @@ def _check_report(page: Path) -> None:
     assert "``" not in text
     assert text.index("In short") < text.index("Seed metrics") < text.index("Hypotheses")
     assert "rec.rig.yaml" in text and f"brake_hil {__version__}" in text
-    assert re.search(r"\(1[0-9]\.\d s\)", text)  # the recording's length
+    assert re.search(r"<b>Recording:</b> \S+ \(\d+\.\d s\)", text)  # its length
     # The top row (best held-out fit) is not the verdict (none): the page says why.
     assert "Why the top row is not the verdict:" in text
     images = re.findall(r'<img src="([^"]+)"', text)
