@@ -594,7 +594,8 @@ def _explain(
         model = candidate(name)
         seen = model.consistent(evidence.values)
         parts.append(
-            f"{model.describe().split('. ')[0]}. Expected signature: {model.signature}"
+            f"{model.describe().split('. ')[0].replace('``', '')}. Expected signature: "
+            f"{model.signature}"
             f" ({'seen in the evidence' if seen else 'not clearly seen in the evidence'})."
         )
     return " ".join(parts)
