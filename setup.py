@@ -40,7 +40,18 @@ setup(
     ],
     extras_require={
         "ros": ROS_WHEELS,
-        "dev": ["pytest>=7", "ruff>=0.5", "mypy>=1.8", "types-PyYAML"],
+        "dev": [
+            "pytest>=7",
+            "ruff>=0.5",
+            "mypy>=1.8",
+            "types-PyYAML",
+            # the ROS 2 linters' standard tests (test/test_flake8.py, test/test_pep257.py):
+            # the Kilted wheels carry no flake8/pydocstyle, which the distro's debs bring
+            "ros-kilted-ament-flake8",
+            "ros-kilted-ament-pep257",
+            "flake8",
+            "pydocstyle",
+        ],
     },
     zip_safe=True,
     maintainer="brake_hil developers",

@@ -8,6 +8,7 @@
      |    +-- MissingTopicError             a required topic is absent
      +-- RecordingWriteError                a recording cannot be written on (disk full)
      +-- SignalError (ValueError)           a signal is too short or not periodic
+     |    +-- NoSteadyPulsingError          no steady 5 Hz pulsing to score
      +-- ModelFileError (ValueError)        a model file is missing or of an unknown kind
      +-- ImprovedModelError (ValueError)    an improved_model.json is malformed
      +-- BaselineError (ValueError)         a regression baseline is missing or malformed
@@ -40,6 +41,7 @@ __all__ = [
     "ImprovedModelError",
     "MissingTopicError",
     "ModelFileError",
+    "NoSteadyPulsingError",
     "RecordingError",
     "RecordingWriteError",
     "RigError",
@@ -71,6 +73,10 @@ class RecordingWriteError(BrakeHilError):
 
 class SignalError(BrakeHilError, ValueError):
     """A signal cannot be analysed (too short, no steady periodic segment, ...)."""
+
+
+class NoSteadyPulsingError(SignalError):
+    """A recording holds no steady 5 Hz pulsing (a ramp, a sweep): nothing to score."""
 
 
 class ModelFileError(BrakeHilError, ValueError):

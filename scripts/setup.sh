@@ -10,7 +10,7 @@ if [ ! -x "$venv/bin/python" ]; then
   python3 -m venv "$venv"
 fi
 if [ ! -f "$stamp" ] || [ "$here/setup.py" -nt "$stamp" ]; then
-  echo "brake_hil: installing dependencies into $venv (first run takes about a minute)" >&2
+  echo "brake_hil: installing dependencies into $venv (first run: a few minutes, see README)" >&2
   log="$venv/install.log"
   if ! "$venv/bin/python" -m pip install --disable-pip-version-check -e "$here[ros,dev]" \
       >"$log" 2>&1; then

@@ -16,6 +16,12 @@ PEER_DATA = Path(os.environ.get("BRAKE_HIL_PEER_DATA", PROJECT.parent / "shared"
 os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
 
 
+def pytest_configure(config: pytest.Config) -> None:
+    """The markers of the ROS 2 linters' standard tests."""
+    for marker in ("linter", "flake8", "pep257"):
+        config.addinivalue_line("markers", f"{marker}: a ROS 2 ament linter test")
+
+
 @pytest.fixture(scope="session")
 def default_rig() -> Rig:
     """The nominal one-washer rig of physics.md."""

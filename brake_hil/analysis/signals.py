@@ -29,7 +29,7 @@ import numpy as np
 import numpy.typing as npt
 from scipy import signal as sps  # type: ignore[import-untyped]
 
-from brake_hil.errors import SignalError
+from brake_hil.errors import NoSteadyPulsingError, SignalError
 from brake_hil.types import FloatArray, IndexArray
 
 EXCITATION_PERIOD_S = 0.2
@@ -654,7 +654,7 @@ def steady_segments(
             f"Recording of {values.size} samples is shorter than {_MIN_SEGMENT_PERIODS} "
             f"periods of {period_s} s: no steady segment can be found."
         )
-        raise SignalError(msg)
+        raise NoSteadyPulsingError(msg)
 
     conditioned = lowpass(values, sample_rate_hz)
     conditioned = conditioned - np.median(conditioned)
@@ -679,13 +679,13 @@ def steady_segments(
     candidate = periodic & settled
     if not np.any(periodic):
         msg = f"No steady segment: the recording never oscillates at {1.0 / period_s:g} Hz."
-        raise SignalError(msg)
+        raise NoSteadyPulsingError(msg)
     if not np.any(candidate):
         msg = (
             f"No steady segment: the {1.0 / period_s:g} Hz oscillation never holds a steady "
             "mean (ramping throughout)."
         )
-        raise SignalError(msg)
+        raise NoSteadyPulsingError(msg)
     steady = candidate & (amplitude >= _MIN_RELATIVE_AMPLITUDE * np.nanmax(amplitude[candidate]))
 
     edges = np.diff(np.concatenate(([0], steady.astype(np.int8), [0])))
@@ -708,5 +708,5 @@ def steady_segments(
             f"No steady segment: the longest steady pulsing lasts {longest:.3g} s after "
             f"{settle_s:g} s settling, shorter than {min_periods} periods of {period_s} s."
         )
-        raise SignalError(msg)
+        raise NoSteadyPulsingError(msg)
     return segments

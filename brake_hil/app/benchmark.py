@@ -196,6 +196,11 @@ class Benchmark:
     json_path: Path | None  # where the figures were written
 
 
+def case_count(directory: Path) -> int:
+    """How many cases ``directory/cases`` holds (0 when none)."""
+    return sum(1 for p in (directory / "cases").glob("*") if p.is_dir())
+
+
 def run_benchmark(
     directory: Path,
     jobs: int = 1,

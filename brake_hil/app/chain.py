@@ -40,6 +40,7 @@ from brake_hil.live.model_file import load_model
 from brake_hil.physics.excitation import PulsingSchedule
 from brake_hil.runtime import set_realtime_priority
 from brake_hil.topics import (
+    AIR_PRESSURE,
     MASTER_CYLINDER_PRESSURE,
     MEASURED_OUTPUTS,
     OUTPUT_CHANNELS,
@@ -267,8 +268,18 @@ def run_chain(
             "recording": str(recording),
             "rate": float(rate),
             "exit_at_end": True,
-            "wait_for_subscribers": subscribers,
-            "wait_for_topics": [f"{spec.name}:{subscribers}" for spec in PREDICTED_OUTPUTS],
+            # Each topic's own consumers: the model takes p_i, the comparator the measured
+            # outputs and the predictions, the recorder everything (p_a only it).
+            "wait_for_subscribers": 0,
+            "wait_for_topics": [
+                f"{spec.name}:{subscribers}"
+                for spec in (MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS, *PREDICTED_OUTPUTS)
+            ]
+            + (
+                [f"{AIR_PRESSURE.name}:1"]
+                if has_recorder and source.air_pressure is not None
+                else []
+            ),
             "wait_timeout": 30.0,
             "start_delay": 1.0,
             "realtime_priority": realtime_priority,

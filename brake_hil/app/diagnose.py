@@ -6,15 +6,17 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from brake_hil.app.output import write_json
-from brake_hil.diagnosis.diagnose import Diagnosis, Progress, diagnose
+from brake_hil.diagnosis.candidates import CANDIDATES
+from brake_hil.diagnosis.diagnose import PAIR_SHORTLIST, Diagnosis, Progress, diagnose
 from brake_hil.io.recording_reader import read_recording
 from brake_hil.physics.rig import load_rig
 from brake_hil.topics import MASTER_CYLINDER_PRESSURE, MEASURED_OUTPUTS
 
 __all__ = ["DIAGNOSIS_STEPS", "DiagnoseResult", "run_diagnose"]
 
-DIAGNOSIS_STEPS = 16
-"""About how many times :func:`~brake_hil.diagnosis.diagnose.diagnose` reports progress."""
+DIAGNOSIS_STEPS = 4 + len(CANDIDATES) + PAIR_SHORTLIST + 1
+"""The most steps :func:`run_diagnose` reports: preparing, calibrating, locating, each single
+candidate, each pair of the shortlist, scoring, the report (fewer when no pair is fitted)."""
 
 
 @dataclass(frozen=True)
@@ -55,5 +57,7 @@ def run_diagnose(
     json_path = out / "diagnosis.json"
     write_json(json_path, diagnosis.as_dict())
     improved = diagnosis.improved_model(rig_path).save(out / "improved_model.json")
-    page = write_report(diagnosis, out)
+    if progress is not None:
+        progress("writing the report")
+    page = write_report(diagnosis, out, rig_path)
     return DiagnoseResult(diagnosis, json_path, improved, page)

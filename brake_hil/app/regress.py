@@ -45,7 +45,7 @@ from brake_hil.analysis.stamp_scoring import (
     score_segments,
 )
 from brake_hil.app.parallel import Outcome, parallel_map, values
-from brake_hil.errors import BaselineError, RecordingError, SignalError
+from brake_hil.errors import BaselineError, NoSteadyPulsingError, RecordingError, SignalError
 from brake_hil.io.recording_reader import read_recording
 from brake_hil.live.model_file import load_model
 from brake_hil.topics import OUTPUT_CHANNELS
@@ -118,7 +118,7 @@ def replay_recording(
     try:
         segments = signals.steady_segments(time_s, signals.lowpass(pressure, rate), rate, period_s)
     except SignalError as err:
-        raise SignalError(f"{recording.path}: {err}") from err
+        raise type(err)(f"{recording.path}: {err}") from err
     predicted = dict(zip(OUTPUT_CHANNELS, outputs))
     observed = {key: value for key, value in measured.items() if value is not None}
     return ReplayResult(
@@ -290,6 +290,8 @@ class Regression:
     baseline_path: Path
     model_file: Path
     results: dict[str, ReplayResult]  # bag key (see :func:`bag_key`) -> replay
+    skipped: dict[str, str]  # bag key -> why: recordings without steady pulsing, not scored
+    lost: tuple[str, ...]  # skipped bags the baseline holds: they no longer score (moved)
     checks: tuple[MetricCheck, ...]  # every metric of every bag against the baseline
     wall_s: float  # wall time of all replays (s)
     updated: bool  # the baseline was (re)written with these results
@@ -303,6 +305,11 @@ class Regression:
     def moved(self) -> tuple[MetricCheck, ...]:
         """Checks past their tolerance or without a baseline."""
         return tuple(check for check in self.checks if check.status != "ok")
+
+    @property
+    def failed(self) -> bool:
+        """A metric moved, or a bag of the baseline could not be scored."""
+        return bool(self.moved or self.lost)
 
 
 def run_regression(
@@ -325,9 +332,13 @@ def run_regression(
         progress: called with each bag's outcome, in the bags' order.
         reader: reads a recording (must pickle: a module-level function).
 
+    A recording without steady 5 Hz pulsing (a ramp, a sweep) has nothing to score: it is
+    skipped (:attr:`Regression.skipped`, with the reason) and never written to the baseline;
+    one the baseline holds is :attr:`Regression.lost`, a failure.
+
     Returns:
         The replays and their checks; the command exits 0 when the baseline was written or
-        nothing moved (:attr:`Regression.moved`), else 1.
+        nothing moved or was lost (:attr:`Regression.failed`), else 1.
 
     Raises:
         BaselineError: unusable baseline, no model file, or two bags with one name.
@@ -344,12 +355,23 @@ def run_regression(
     if len(set(keys)) != len(keys):
         raise BaselineError(f"{baseline_path}: bags given twice: {sorted(keys)}")
     started = time.perf_counter()
-    results = dict(zip(keys, replay_all(bags, model_file, reader, jobs or None, None, progress)))
+    replay = partial(replay_file, model_file=model_file, reader=reader, mean_pressure=None)
+    outcomes = parallel_map(replay, bags, jobs or None, progress)
     wall = time.perf_counter() - started
+    results: dict[str, ReplayResult] = {}
+    skipped: dict[str, str] = {}
+    for key, outcome in zip(keys, outcomes):
+        if isinstance(outcome.error, NoSteadyPulsingError):
+            skipped[key] = str(outcome.error)
+        else:
+            results[key] = outcome.unwrap()
+    lost = tuple(key for key in skipped if key in (previous or {}).get("bags", {}))
     checks = compare_with_baseline(results, previous or {})
     if update:
         document = baseline_document(results, previous)
         document["model_file"] = os.path.relpath(model_file, baseline_path.parent)
         baseline_path.parent.mkdir(parents=True, exist_ok=True)
         baseline_path.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
-    return Regression(baseline_path, model_file, results, tuple(checks), wall, update)
+    return Regression(
+        baseline_path, model_file, results, skipped, lost, tuple(checks), wall, update
+    )

@@ -33,12 +33,38 @@ DESCRIPTION = (
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the launcher."""
-    parser = argparse.ArgumentParser(description=DESCRIPTION)
-    parser.add_argument("recording", type=Path, nargs="?", default=DEFAULT_RECORDING)
-    parser.add_argument("--model", type=Path, default=DEFAULT_MODEL, help="model file (rig YAML)")
-    parser.add_argument("--out", type=Path, default=PROJECT / "out" / "chain")
+    parser = argparse.ArgumentParser(
+        prog="python -m brake_hil.nodes.chain",
+        description=DESCRIPTION,
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    parser.add_argument(
+        "recording",
+        type=Path,
+        nargs="?",
+        default=DEFAULT_RECORDING,
+        help="recording to replay (rosbag2 directory or .mcap)",
+    )
+    parser.add_argument(
+        "--model",
+        type=Path,
+        default=DEFAULT_MODEL,
+        help="model file (rig YAML or improved_model.json)",
+    )
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=PROJECT / "out" / "chain",
+        help="folder for the recording, the nodes' logs and summaries "
+        "(with --can-emulator: out/chain_can)",
+    )
     parser.add_argument("--rate", type=float, default=1.0, help="replay rate factor")
-    parser.add_argument("--domain-id", type=int, default=None)
+    parser.add_argument(
+        "--domain-id",
+        type=int,
+        default=None,
+        help="ROS_DOMAIN_ID of the nodes (default: a free one picked per run)",
+    )
     parser.add_argument("--no-recorder", action="store_true", help="run without the recorder")
     parser.add_argument(
         "--realtime-priority",

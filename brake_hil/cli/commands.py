@@ -9,19 +9,20 @@ when a metric moved). Errors on bad input propagate as
 from __future__ import annotations
 
 import argparse
+from contextlib import ExitStack
+import math
 from pathlib import Path
 import sys
+from typing import TYPE_CHECKING
 
 from tqdm import tqdm
 
-from brake_hil.app.benchmark import CaseResult, run_benchmark
-from brake_hil.app.cases import run_cases
-from brake_hil.app.characterize import run_characterize
-from brake_hil.app.compare import run_compare
-from brake_hil.app.diagnose import DIAGNOSIS_STEPS, run_diagnose
-from brake_hil.app.recover import RecoverResult, run_recover
-from brake_hil.app.regress import MetricCheck, run_regression
-from brake_hil.app.simulate import run_simulate, run_virtual_simulate
+from brake_hil.cli.progress import progress_bar
+
+if TYPE_CHECKING:
+    from brake_hil.app.benchmark import CaseResult
+    from brake_hil.app.recover import RecoverResult
+    from brake_hil.app.regress import MetricCheck
 
 __all__ = [
     "benchmark",
@@ -30,7 +31,9 @@ __all__ = [
     "compare",
     "diagnose",
     "format_checks",
+    "recording_name",
     "regress",
+    "rig_beside",
     "simulate_lti",
     "simulate_virtual",
 ]
@@ -43,6 +46,8 @@ def _json_written(path: Path | None) -> None:
 
 def compare(args: argparse.Namespace) -> int:
     """``brake-hil compare``: the seed's Table 4-5 metrics per channel."""
+    from brake_hil.app.compare import run_compare
+
     result = run_compare(args.recording, args.rig, args.json, args.plot)
     print(f"recording {args.recording}  rig {args.rig} ({result.rig.name})")
     for segment in result.comparison.segments:
@@ -64,6 +69,8 @@ def compare(args: argparse.Namespace) -> int:
 
 def characterize(args: argparse.Namespace) -> int:
     """``brake-hil characterize``: the seed's Table 3 per steady segment."""
+    from brake_hil.app.characterize import run_characterize
+
     result = run_characterize(args.recording, args.rig, args.json)
     header = (
         f"{'segment s':>13s}{'max p MPa':>10s}{'k_eh*':>7s}{'eta_eh':>7s}"
@@ -82,22 +89,40 @@ def characterize(args: argparse.Namespace) -> int:
 
 
 def diagnose(args: argparse.Namespace) -> int:
-    """``brake-hil diagnose``: the verdict, its explanation and where the files are."""
-    with tqdm(
-        total=DIAGNOSIS_STEPS,
-        desc="diagnose",
-        unit="step",
-        file=sys.stderr,
-        disable=not sys.stderr.isatty(),
-    ) as bar:
+    """``brake-hil diagnose``: the verdict, its explanation and where the files are.
+
+    ``--rig`` defaults to ``RECORDING.rig.yaml`` beside the recording, ``--out`` to
+    ``out/<recording name>/``; the command says which it used.
+    """
+    from brake_hil.app.diagnose import DIAGNOSIS_STEPS, run_diagnose
+
+    rig = args.rig if args.rig is not None else rig_beside(args.recording)
+    out = args.out if args.out is not None else Path("out") / recording_name(args.recording)
+    if args.rig is None:
+        print(f"rig file: {rig} (beside the recording; --rig to choose another)")
+    if args.out is None:
+        print(f"output folder: {out} (--out to choose another)")
+    sys.stdout.flush()
+    with ExitStack() as stack:
+        bars: list[tqdm] = []  # type: ignore[type-arg]  # made at the first step: bad input
+        # before it leaves the one error line alone on stderr
 
         def progress(message: str) -> None:
-            bar.set_postfix_str(message)
+            if not bars:
+                bars.append(stack.enter_context(progress_bar(DIAGNOSIS_STEPS, "diagnose", "step")))
+            bar = bars[0]
+            if message.startswith("left out"):
+                bar.write(f"diagnose: {message}", file=sys.stderr)
+                return
+            if bar.n + 1 > bar.total:  # never "17 steps of 16"
+                bar.total = bar.n + 1
+            bar.set_postfix_str(message, refresh=False)
             bar.update(1)
 
-        result = run_diagnose(args.recording, args.rig, args.out, progress)
-        bar.n = bar.total
-        bar.refresh()
+        result = run_diagnose(args.recording, rig, out, progress)
+        if bars:
+            bars[0].n = bars[0].total
+            bars[0].set_postfix_str("done")
     diagnosis = result.diagnosis
     _json_written(result.json_path)
     print(f"improved model written to {result.improved_model_path} (caliper_model loads it)")
@@ -110,6 +135,8 @@ def diagnose(args: argparse.Namespace) -> int:
 
 def simulate_lti(args: argparse.Namespace) -> int:
     """``brake-hil simulate`` of the LTI model."""
+    from brake_hil.app.simulate import run_simulate
+
     result = run_simulate(args.rig, args.out, args.max_pressure, args.pulsing_seconds, args.seed)
     print(f"wrote {result.out} ({result.samples} samples, {result.duration_s:.1f} s)")
     return 0
@@ -117,23 +144,26 @@ def simulate_lti(args: argparse.Namespace) -> int:
 
 def simulate_virtual(args: argparse.Namespace) -> int:
     """``brake-hil simulate`` on the virtual rig, with a progress bar of simulated time."""
-    bars: list[tqdm] = []
+    from brake_hil.app.simulate import run_virtual_simulate
 
-    def progress(simulated: float, total: float) -> None:
-        if not bars:
-            bars.append(
-                tqdm(
-                    total=round(total, 3),
-                    unit="s",
-                    desc="virtual rig",
-                    file=sys.stderr,
-                    bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.1f}/{total:.1f} s "
-                    "simulated [{elapsed}<{remaining}]",
+    with ExitStack() as stack:
+        bars: list[tqdm] = []  # type: ignore[type-arg]
+
+        def progress(simulated: float, total: float) -> None:
+            if not bars:
+                bars.append(
+                    stack.enter_context(
+                        progress_bar(
+                            round(total, 3),
+                            "virtual rig",
+                            "s",
+                            bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.1f}/{total:.1f} "
+                            "s simulated [{elapsed}<{remaining}]",
+                        )
+                    )
                 )
-            )
-        bars[0].update(max(0.0, round(simulated, 3) - bars[0].n))
+            bars[0].update(max(0.0, round(simulated, 3) - bars[0].n))
 
-    try:
         result = run_virtual_simulate(
             args.rig,
             args.out,
@@ -148,9 +178,6 @@ def simulate_virtual(args: argparse.Namespace) -> int:
             rtol=args.rtol,
             progress=progress,
         )
-    finally:
-        for bar in bars:
-            bar.close()
     run = result.run
     names = ", ".join(f"{e.name}={e.strength:g}" for e in run.effects) or "no effect"
     print(f"wrote {result.out} ({run.time.size} samples, {run.time[-1]:.1f} s; {names})")
@@ -164,14 +191,16 @@ def simulate_virtual(args: argparse.Namespace) -> int:
 
 def cases(args: argparse.Namespace) -> int:
     """``brake-hil cases``, with a progress bar of cases written."""
-    bars: list[tqdm] = []
+    from brake_hil.app.cases import run_cases
 
-    def progress(done: int, total: int) -> None:
-        if not bars:
-            bars.append(tqdm(total=total, unit="case", desc="cases", file=sys.stderr))
-        bars[0].update(done - bars[0].n)
+    with ExitStack() as stack:
+        bars: list[tqdm] = []  # type: ignore[type-arg]
 
-    try:
+        def progress(done: int, total: int) -> None:
+            if not bars:
+                bars.append(stack.enter_context(progress_bar(total, "cases", "case")))
+            bars[0].update(done - bars[0].n)
+
         result = run_cases(
             args.out,
             args.count,
@@ -182,25 +211,40 @@ def cases(args: argparse.Namespace) -> int:
             kinds=tuple(args.kind),
             progress=progress,
         )
-    finally:
-        for bar in bars:
-            bar.close()
     print(f"wrote {result.count} cases under {result.cases_dir}; labels in {result.labels_path}")
     return 0
 
 
 def benchmark(args: argparse.Namespace) -> int:
-    """``brake-hil benchmark``: a line per case as its verdict comes in, then the figures."""
+    """``brake-hil benchmark``: a bar of cases, a line per case as its verdict comes in.
 
-    def show(result: CaseResult) -> None:
-        verdict = ", ".join(result.effects) or "none"
-        print(
-            f"case {result.case}: {verdict} ({result.confidence:.2f}, {result.seconds:.1f} s)"
-            + (f" error: {result.error}" if result.error else ""),
-            flush=True,
-        )
+    Then the figures; a figure over no case is ``n/a``.
+    """
+    from brake_hil.app.benchmark import case_count, run_benchmark
 
-    result = run_benchmark(args.directory, args.jobs, args.json, show)
+    with ExitStack() as stack:
+        bars: list[tqdm] = []  # type: ignore[type-arg]
+
+        def start() -> None:  # once the cases are known to exist: bad input stays one line
+            bars.append(stack.enter_context(progress_bar(count, "benchmark", "case")))
+
+        def show(result: CaseResult) -> None:
+            if not bars:
+                start()
+            bar = bars[0]
+            verdict = ", ".join(result.effects) or "none"
+            bar.write(
+                f"case {result.case}: {verdict} ({result.confidence:.2f}, {result.seconds:.1f} s)"
+                + (f" error: {result.error}" if result.error else ""),
+                file=sys.stdout,
+            )
+            sys.stdout.flush()
+            bar.update(1)
+
+        count = case_count(args.directory)
+        if count and (args.directory / "labels.json").is_file():
+            start()
+        result = run_benchmark(args.directory, args.jobs, args.json, show)
     figures = result.figures
     rows = [
         ("top-1 accuracy, single effects", "top1_accuracy_single", "single_effect_cases"),
@@ -208,29 +252,54 @@ def benchmark(args: argparse.Namespace) -> int:
         ("false-positive rate, null cases", "false_positive_rate_null", "null_cases"),
         ("unexplained recall", "unexplained_recall", "unexplained_cases"),
     ]
-    for text, key, count in rows:
-        print(f"{text:40s}{100 * _number(figures[key]):6.1f} %  of {figures[count]} cases")
-    print(
-        f"{'held-out NRMSE improvement, median':40s}"
-        f"{_number(figures['held_out_nrmse_improvement_median']):6.2f} x"
-    )
-    print(
-        f"{'seconds per recording, mean / max':40s}"
-        f"{_number(figures['seconds_per_recording_mean']):6.1f} / "
-        f"{_number(figures['seconds_per_recording_max']):.1f}"
-    )
+    for text, key, cases_key in rows:
+        share = _figure(figures[key], 100.0, "6.1f", " %")
+        print(f"{text:40s}{share}  of {figures[cases_key]} cases")
+    improvement = _figure(figures["held_out_nrmse_improvement_median"], 1.0, "6.2f", " x")
+    print(f"{'held-out NRMSE improvement, median':40s}{improvement}")
+    mean = _figure(figures["seconds_per_recording_mean"], 1.0, "6.1f")
+    most = _figure(figures["seconds_per_recording_max"], 1.0, ".1f")
+    print(f"{'seconds per recording, mean / max':40s}{mean} / {most}")
     _json_written(result.json_path)
     return 0
 
 
-def _number(value: object) -> float:
-    """A figure of :func:`~brake_hil.app.benchmark.score` as a float."""
-    assert isinstance(value, int | float)
-    return float(value)
+def _figure(value: object, scale: float, spec: str, suffix: str = "") -> str:
+    """A figure of :func:`~brake_hil.app.benchmark.score`; ``n/a`` when over no case (NaN)."""
+    if not isinstance(value, int | float) or math.isnan(value):
+        width = spec.split(".")[0]
+        return f"{'n/a':>{width or 0}s}" + (" " * len(suffix) if suffix else "")
+    return f"{scale * value:{spec}}{suffix}"
+
+
+def rig_beside(recording: Path) -> Path:
+    """``RECORDING.rig.yaml`` beside a recording (a bag folder or a bare ``.mcap``/``.db3``).
+
+    Raises:
+        BrakeHilError: no such file (the message says to pass ``--rig``).
+    """
+    from brake_hil.errors import BrakeHilError
+
+    base = Path(str(recording).rstrip("/"))
+    candidates = [base.parent / f"{base.name}.rig.yaml"]
+    if base.suffix in (".mcap", ".db3"):
+        candidates.append(base.with_suffix(".rig.yaml"))
+    for path in candidates:
+        if path.is_file():
+            return path
+    raise BrakeHilError(f"{recording}: no rig file beside it ({candidates[0]}); pass --rig")
+
+
+def recording_name(recording: Path) -> str:
+    """A recording's name: its folder's, or its file's without the suffix."""
+    base = Path(str(recording).rstrip("/"))
+    return base.stem if base.suffix in (".mcap", ".db3") else base.name
 
 
 def regress(args: argparse.Namespace) -> int:
     """``brake-hil regress``: 0 when nothing moved (or the baseline was written), else 1."""
+    from brake_hil.app.regress import run_regression
+
     result = run_regression(args.recordings, args.baseline, args.model, args.update, args.jobs)
     for key, replay in result.results.items():
         print(
@@ -242,13 +311,23 @@ def regress(args: argparse.Namespace) -> int:
         f"{len(result.results)} recordings, {result.data_s:.1f} s of data in "
         f"{result.wall_s:.2f} s wall time"
     )
-    for line in format_checks(result.checks):
-        print(line)
+    for key, reason in result.skipped.items():
+        lost = " (in the baseline: FAILED)" if key in result.lost else ""
+        print(f"{key}: skipped, no steady 5 Hz pulsing to score{lost} -- {reason}")
+    if result.checks:
+        for line in format_checks(result.checks):
+            print(line)
     if result.updated:
         print(f"baseline written to {result.baseline_path}")
         return 0
     if result.moved:
         print(f"{len(result.moved)} metrics moved past their tolerance or have no baseline")
+    if result.lost:
+        print(f"{len(result.lost)} recordings of the baseline no longer hold steady pulsing")
+    if result.failed:
+        return 1
+    if not result.results:
+        print("no recording scored")
         return 1
     print("every metric within its tolerance")
     return 0
@@ -273,6 +352,8 @@ def format_checks(checks: tuple[MetricCheck, ...]) -> list[str]:
 
 def recover(args: argparse.Namespace) -> int:
     """``brake-hil recover``: 0 when a finished copy was written."""
+    from brake_hil.app.recover import run_recover
+
     result = run_recover(args.bag, args.out)
     for line in format_recovery(result):
         print(line)

@@ -1,16 +1,35 @@
-"""The argument parser of ``brake-hil``: every sub-command, its options and their help."""
+"""The argument parser of ``brake-hil``: every sub-command, its options and their help.
+
+It imports nothing heavy (no numpy, scipy, virtual rig), so ``brake-hil --help`` is quick:
+the few values its help shows from the simulator (:data:`EXCITATIONS`,
+:data:`SOLVER_METHOD`, :data:`RELATIVE_TOLERANCE`) are repeated here and
+``test/cli/test_cli_help.py`` keeps them in step.
+"""
 
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
 
-from brake_hil.app.simulate import EXCITATIONS
+from brake_hil import __version__
 from brake_hil.errors import BrakeHilError
-from brake_hil.virtual_rig.effects import EFFECTS
-from brake_hil.virtual_rig.simulator import RELATIVE_TOLERANCE, SOLVER_METHOD
+from brake_hil.physics.catalogue import CATALOGUE
 
-__all__ = ["build_parser", "uses_virtual_rig"]
+__all__ = [
+    "EXCITATIONS",
+    "RELATIVE_TOLERANCE",
+    "SOLVER_METHOD",
+    "build_parser",
+    "uses_virtual_rig",
+]
+
+EXCITATIONS = ("pulsing", "solenoid", "ramp", "sweep")
+"""``brake_hil.app.simulate.EXCITATIONS``."""
+SOLVER_METHOD = "BDF"
+"""``brake_hil.virtual_rig.simulator.SOLVER_METHOD``."""
+RELATIVE_TOLERANCE = 1.0e-4
+"""``brake_hil.virtual_rig.simulator.RELATIVE_TOLERANCE``."""
+_RECORDING_HELP = "rosbag2 directory (MCAP or sqlite3) or a bare .mcap file"
 
 _VIRTUAL_OPTIONS = ("effect", "excitation", "nominal", "rig_out", "method", "rtol")
 
@@ -20,20 +39,30 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="brake-hil", description="Hardware-in-the-loop tools for hydraulic disk brakes."
     )
+    parser.add_argument("--version", action="version", version=f"brake-hil {__version__}")
     commands = parser.add_subparsers(dest="command", required=True)
     cmp = commands.add_parser("compare", help="run the rig's LTI model on a recording")
-    cmp.add_argument("recording", type=Path)
-    cmp.add_argument("--rig", type=Path, required=True)
-    cmp.add_argument("--json", type=Path)
+    cmp.add_argument("recording", type=Path, help=_RECORDING_HELP)
+    cmp.add_argument("--rig", type=Path, required=True, help="the rig file (YAML) to model")
+    cmp.add_argument("--json", type=Path, help="also write the metrics here as JSON")
     cmp.add_argument("--plot", type=Path, help="PNG of measured vs predicted")
     chz = commands.add_parser("characterize", help="the seed's Table 3 from a recording")
-    chz.add_argument("recording", type=Path)
-    chz.add_argument("--rig", type=Path, required=True)
-    chz.add_argument("--json", type=Path)
+    chz.add_argument("recording", type=Path, help=_RECORDING_HELP)
+    chz.add_argument("--rig", type=Path, required=True, help="the rig file (YAML)")
+    chz.add_argument("--json", type=Path, help="also write the table here as JSON")
     dgn = commands.add_parser("diagnose", help="find and model the physics the model left out")
-    dgn.add_argument("recording", type=Path)
-    dgn.add_argument("--rig", type=Path, required=True)
-    dgn.add_argument("--out", type=Path, required=True, help="folder for diagnosis.json etc.")
+    dgn.add_argument("recording", type=Path, help=_RECORDING_HELP)
+    dgn.add_argument(
+        "--rig",
+        type=Path,
+        help="the nominal rig file (YAML; default: RECORDING.rig.yaml beside the recording)",
+    )
+    dgn.add_argument(
+        "--out",
+        type=Path,
+        help="folder for diagnosis.json, improved_model.json and report.html "
+        "(default: out/<recording name>/ in the working directory)",
+    )
     sim = commands.add_parser(
         "simulate", help="write a recording of the LTI model or of the virtual rig"
     )
@@ -46,16 +75,23 @@ def build_parser() -> argparse.ArgumentParser:
         default=[1.38e6],
         help="maximum master-cylinder pressures, Pa (one segment each)",
     )
-    sim.add_argument("--pulsing-seconds", type=float, default=5.0)
-    sim.add_argument("--seed", type=int, default=0)
+    sim.add_argument(
+        "--pulsing-seconds", type=float, default=5.0, help="5 Hz pulsing per segment, s (5)"
+    )
+    sim.add_argument("--seed", type=int, default=0, help="sensor-noise seed (0)")
     _add_virtual_rig_arguments(sim)
     _add_cases_parser(commands)
     bench = commands.add_parser("benchmark", help="score the diagnosis blind on labelled cases")
     bench.add_argument("directory", type=Path, help="made by 'brake-hil cases'")
-    bench.add_argument("--jobs", type=int, default=1)
-    bench.add_argument("--json", type=Path)
+    bench.add_argument("--jobs", type=int, default=1, help="worker processes (1)")
+    bench.add_argument("--json", type=Path, help="also write the figures here as JSON")
     reg = commands.add_parser("regress", help="replay recordings through the model vs a baseline")
-    reg.add_argument("recordings", type=Path, nargs="+")
+    reg.add_argument(
+        "recordings",
+        type=Path,
+        nargs="+",
+        help="recordings to replay; one without steady 5 Hz pulsing is skipped with a note",
+    )
     reg.add_argument("--baseline", type=Path, required=True, help="baseline JSON")
     reg.add_argument("--model", type=Path, help="model file (default: the baseline's)")
     reg.add_argument("--update", action="store_true", help="rewrite the baseline")
@@ -95,7 +131,7 @@ def _add_virtual_rig_arguments(parser: argparse.ArgumentParser) -> None:
         "--effect",
         action="append",
         metavar="NAME[=STRENGTH][,PARAM=VALUE...]",
-        help=f"add an effect (repeatable): {', '.join(EFFECTS)}; strength 0-1 (default 1)",
+        help=f"add an effect (repeatable): {', '.join(CATALOGUE)}; strength 0-1 (default 1)",
     )
     group.add_argument(
         "--excitation",
@@ -123,7 +159,7 @@ def _add_cases_parser(commands: argparse._SubParsersAction) -> None:  # type: ig
     )
     cases.add_argument("--out", type=Path, required=True, help="new directory")
     cases.add_argument("--count", type=int, default=26, help="number of cases (26: one round)")
-    cases.add_argument("--seed", type=int, default=0)
+    cases.add_argument("--seed", type=int, default=0, help="draws the cases (0)")
     cases.add_argument(
         "--pulsing-seconds", type=float, default=5.0, help="per pressure segment (5: 18 s)"
     )

@@ -112,7 +112,8 @@ def collect(
     )
     worst = max(nrmse, key=lambda k: nrmse[k])
     findings.append(
-        "calibrated LTI baseline NRMSE over the steady cycles: "
+        "calibrated LTI baseline's RMS residual over the steady cycles, in % of the whole "
+        "recording's peak-to-peak (the fits' measure, not the seed's per-cycle NRMSE): "
         + ", ".join(f"{k} {100 * v:.2f} %" for k, v in nrmse.items())
         + (f"; mismatched: {', '.join(channels)}" if channels else "; no channel above 1 %")
     )
@@ -138,7 +139,7 @@ def collect(
             windows.append((part.window.start, part.window.end))
     if len(parts) > 1:
         findings.append(
-            f"{worst} NRMSE per segment (mean p_i): "
+            f"{worst} RMS residual per segment, same measure (mean p_i): "
             + ", ".join(
                 f"{100 * s[worst]:.2f} % ({p.window.mean_pressure / 1e6:.2f} MPa)"
                 for s, p in zip(per_segment, parts)

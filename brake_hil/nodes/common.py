@@ -46,7 +46,7 @@ from rclpy.signals import SignalHandlerOptions
 from sensor_msgs.msg import FluidPressure
 
 from brake_hil.io.stamped_cdr import FLOAT_FIELDS
-from brake_hil.nodes.settings import parameter_specs
+from brake_hil.nodes.settings import NODE_SETTINGS, help_text, parameter_specs
 from brake_hil.runtime import TimingSummary
 from brake_hil.topics import TopicSpec
 
@@ -99,6 +99,48 @@ def init_ros(args: Sequence[str] | None) -> None:
         args=list(args) if args is not None else None,
         signal_handler_options=SignalHandlerOptions.NO,
     )
+
+
+HELP_FLAGS = ("-h", "--help")
+"""What asks a node for its help (before ``--ros-args``)."""
+CHECKOUT = Path(__file__).resolve().parents[2]
+"""The folder above the package: the source checkout when run from one."""
+RECORDINGS_HOME = "~/brake_hil_recordings"
+"""Where the recorder writes by default when started inside the source checkout."""
+
+
+def asks_for_help(args: Sequence[str] | None) -> bool:
+    """True when the command line (``sys.argv`` when None) holds ``-h``/``--help``.
+
+    Only the node's own arguments count: those before ``--ros-args``.
+    """
+    argv = list(sys.argv[1:] if args is None else args)
+    if "--ros-args" in argv:
+        argv = argv[: argv.index("--ros-args")]
+    return any(flag in argv for flag in HELP_FLAGS)
+
+
+def is_source_checkout(folder: Path) -> bool:
+    """True when ``folder`` is the brake_hil source checkout this package runs from, or in it."""
+    if not (CHECKOUT / "package.xml").is_file() or not (CHECKOUT / "brake_hil").is_dir():
+        return False
+    folder = folder.resolve()
+    return folder == CHECKOUT or CHECKOUT in folder.parents
+
+
+def recording_directory(output_dir: str, cwd: Path | None = None) -> Path:
+    """Where the recorder makes its recording directory.
+
+    ``output_dir`` when given; else the working directory (as ``ros2 bag record`` does),
+    unless that is the source checkout or inside it: then :data:`RECORDINGS_HOME`, so no
+    node writes into the source tree by default.
+    """
+    if output_dir:
+        return Path(output_dir).expanduser()
+    here = Path.cwd() if cwd is None else cwd
+    if is_source_checkout(here):
+        return Path(RECORDINGS_HOME).expanduser()
+    return here
 
 
 def config_path(name: str) -> Path:
@@ -426,7 +468,12 @@ def run_node(
     A node that cannot be built from its parameters (``bad_input``) exits 2 with one line;
     ``run`` returns whether the node stayed healthy (exit 0, else 1). ``close()`` and
     ``destroy_node()`` always run, so a recording is finalised even after an error.
+    ``-h``/``--help`` prints the node's usage and parameters (:func:`help_text`) and exits 0
+    before rclpy starts: nothing is built, advertised or written.
     """
+    if asks_for_help(args):
+        print(help_text(name) if name in NODE_SETTINGS else f"usage: {name} [--ros-args ...]")
+        return 0
     init_ros(args)
     try:
         node = make_node()

@@ -181,6 +181,8 @@ class PressureSourceNode(Node):
 
         On the source's own topics the count is of subscriptions matched by its publisher
         (what the middleware will deliver to); on other topics, of subscriptions on the graph.
+        Besides the counts asked for, every subscription the graph shows on an own topic must
+        be matched. Every 2 s of waiting the log says what is still missing.
         """
         own = {pub.topic_name: pub for pub in self._outputs.values()}
         topics = dict.fromkeys(own, self.settings.wait_for_subscribers)
@@ -196,14 +198,40 @@ class PressureSourceNode(Node):
                 return int(publisher.get_subscription_count())
             return int(self.count_subscribers(name))
 
-        deadline = time.monotonic() + self.settings.wait_timeout
+        def unmatched() -> list[str]:
+            # Subscriptions on the graph that the publisher has not matched yet.
+            return [
+                name
+                for name, publisher in own.items()
+                if publisher.get_subscription_count() < self.count_subscribers(name)
+            ]
+
+        started = time.monotonic()
+        deadline = started + self.settings.wait_timeout
+        said = started
         while not self._stop.is_set():
-            short = {n: c for n, c in topics.items() if count(n) < c}
-            if not short:
+            short = {n: (count(n), c) for n, c in topics.items() if count(n) < c}
+            pending = unmatched()
+            if not short and not pending:
+                if time.monotonic() - started > 1.0:
+                    self.get_logger().info(
+                        f"subscribers matched after {time.monotonic() - started:.1f} s: starting"
+                    )
                 return
+            waiting = [f"{n} ({have} of {want})" for n, (have, want) in sorted(short.items())]
+            waiting += [f"{n} (a subscriber not matched yet)" for n in pending if n not in short]
             if time.monotonic() > deadline:
-                self.get_logger().warning(f"starting without all subscribers: {sorted(short)}")
+                self.get_logger().warning(
+                    f"starting after {self.settings.wait_timeout:g} s without all subscribers: "
+                    + ", ".join(waiting)
+                )
                 return
+            if time.monotonic() - said >= 2.0:
+                said = time.monotonic()
+                self.get_logger().info(
+                    f"waiting for subscribers ({said - started:.0f} s of at most "
+                    f"{self.settings.wait_timeout:g} s): " + ", ".join(waiting)
+                )
             self.state = "waiting for subscribers"
             time.sleep(0.02)
 

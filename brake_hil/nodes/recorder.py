@@ -32,7 +32,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 from datetime import UTC, datetime
 import importlib
-from pathlib import Path
 import re
 import sys
 import threading
@@ -101,7 +100,7 @@ class RecorderNode(Node):
         bag_name = settings.bag_name
         if not bag_name:
             bag_name = "brake_hil_" + datetime.now(UTC).strftime("%Y_%m_%d-%H_%M_%S")
-        self.bag_path = Path(settings.output_dir) / bag_name
+        self.bag_path = common.recording_directory(settings.output_dir) / bag_name
         self._recorder = McapRecorder(
             self.bag_path,
             max_file_bytes=settings.max_file_bytes or None,

@@ -34,10 +34,12 @@ if TYPE_CHECKING:
 __all__ = [
     "CaliperModelSettings",
     "ComparatorSettings",
+    "NODE_SETTINGS",
     "ParameterSpec",
     "PressureSourceSettings",
     "RecorderSettings",
     "RigEmulatorSettings",
+    "help_text",
     "parameter",
     "parameter_specs",
 ]
@@ -242,7 +244,11 @@ class RecorderSettings:
     default per-reader sample limit.
     """
 
-    output_dir: str = parameter("bags", "the recording directory is made here")
+    output_dir: str = parameter(
+        "",
+        "the recording directory is made here; empty: the working directory, or "
+        "~/brake_hil_recordings when that is inside the brake_hil source checkout",
+    )
     bag_name: str = parameter("", "the recording directory's name; empty: brake_hil_<UTC time>")
     topics: tuple[str, ...] = parameter(
         ("/brake/**", "/diagnostics"), "topic globs to record: * one name level, ** any depth"
@@ -310,3 +316,56 @@ class RigEmulatorSettings:
             pulsing_s=self.pulsing_s,
             pulsing_hz=self.pulsing_hz,
         )
+
+
+NODE_SETTINGS: dict[str, type[DataclassInstance]] = {
+    "pressure_source": PressureSourceSettings,
+    "caliper_model": CaliperModelSettings,
+    "comparator": ComparatorSettings,
+    "recorder": RecorderSettings,
+    "rig_emulator": RigEmulatorSettings,
+}
+"""Each node's settings dataclass, by node (and console script) name."""
+
+_PARAMS_FILES = {"recorder": "recorder.yaml", "rig_emulator": "rig_emulator.yaml"}
+
+
+def _type_name(kind: Any) -> str:
+    if typing.get_origin(kind) is tuple:
+        return f"{typing.get_args(kind)[0].__name__}[]"
+    return str(kind.__name__)
+
+
+def _plain(text: str) -> str:
+    return text.replace("``", "").replace(":class:", "").replace(":attr:", "")
+
+
+def help_text(node: str) -> str:
+    """The ``--help`` of a node: usage, what it does, every parameter.
+
+    Each parameter with its type, default, unit and description, from the node's settings
+    dataclass (:data:`NODE_SETTINGS`), so the help and the node cannot disagree.
+
+    Args:
+        node: the node's name, a key of :data:`NODE_SETTINGS`.
+    """
+    settings = NODE_SETTINGS[node]
+    params_file = _PARAMS_FILES.get(node, "nodes.yaml")
+    doc = _plain(settings.__doc__ or "").strip().splitlines()
+    body = "\n".join(line.strip() for line in doc[1:]).strip()
+    lines = [
+        f"usage: {node} [-h] [--ros-args -p NAME:=VALUE ... | --ros-args --params-file FILE]",
+        f"       ros2 run brake_hil {node} --ros-args -p NAME:=VALUE",
+        "",
+        f"The brake_hil {node} node (params file: config/{params_file}).",
+    ]
+    if body:
+        lines += ["", body]
+    lines += ["", "parameters (name  type  default  [unit]  description):"]
+    for spec in parameter_specs(settings):
+        default = list(spec.default) if isinstance(spec.default, tuple) else spec.default
+        unit = f"  [{spec.unit}]" if spec.unit else ""
+        lines.append(f"  {spec.name}  {_type_name(spec.kind)}  {default!r}{unit}")
+        lines.append(f"      {spec.description}")
+    lines += ["", "-h, --help  print this and exit (starts nothing, writes nothing)"]
+    return "\n".join(lines)

@@ -1,15 +1,22 @@
 """The diagnosis as a test engineer reads it: one HTML page with its figures beside it.
 
-``DIR/report.html`` shows the verdict in plain words, then measured against baseline against
+``DIR/report.html`` starts with a short summary in plain words (what was wrong, what physics,
+how much better, how sure, what to check on the rig), then the seed's Table 4-5 metrics
+before and after (one NRMSE definition, said once), measured against baseline against
 improved on held-out cycles with residuals, the residual over the phase of the 5 Hz cycle,
-harmonic bars (seed Table 1), hysteresis loops, the evidence, the hypotheses and the fitted
-parameters with their uncertainty, and the seed's Table 4-5 metrics before and after.
+harmonic bars (seed Table 1), the seal's hysteresis loop, the evidence, the calibration
+(rig values far outside their tolerance said in words), the hypotheses with why each is or
+is not the verdict, and the fitted parameters, those the data did not identify apart.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from datetime import UTC, datetime
 import html
+import math
 from pathlib import Path
+import re
 
 import matplotlib
 
@@ -18,19 +25,76 @@ from matplotlib.figure import Figure  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from brake_hil.analysis import signals  # noqa: E402
+from brake_hil import __version__  # noqa: E402
 from brake_hil.diagnosis.candidates import CANDIDATES  # noqa: E402
-from brake_hil.diagnosis.diagnose import Diagnosis  # noqa: E402
+from brake_hil.diagnosis.diagnose import (  # noqa: E402
+    Diagnosis,
+    Verdict,
+    hypothesis_note,
+    ratio,
+)
 from brake_hil.diagnosis.evidence import PHASE_BINS  # noqa: E402
-from brake_hil.diagnosis.fitting import Model  # noqa: E402
+from brake_hil.diagnosis.fitting import Fit, Model  # noqa: E402
+from brake_hil.physics.catalogue import CATALOGUE  # noqa: E402
 from brake_hil.topics import OUTPUT_CHANNELS  # noqa: E402
+
+__all__ = [
+    "FLAG_SIGMA",
+    "NRMSE_DEFINITION",
+    "RIG_CHECKS",
+    "calibration_findings",
+    "findings",
+    "identified",
+    "improved_multipliers",
+    "write_report",
+]
 
 UNITS = {"p_b": ("MPa", 1e-6), "F_k": ("kN", 1e-3), "x_c": ("um", 1e6)}
 COLOURS = {"measured": "black", "baseline": "tab:blue", "improved": "tab:red"}
+DPI = 130
+LEGEND_SIZE = 10
+
+NRMSE_DEFINITION = (
+    "NRMSE is the RMS of (predicted - measured) over the measured peak-to-peak, per 5 Hz "
+    "cycle, averaged over the held-out cycles (the seed's Tables 4-5); every NRMSE on this "
+    "page is this one."
+)
+FLAG_SIGMA = 3.0
+"""A calibration multiplier this many prior sigmas from 1 is a finding about the rig file."""
+IDENTIFIED_RELATIVE_SIGMA = 0.5
+"""A parameter is identified when its one sigma is below this share of its value."""
+
+MULTIPLIER_WORDS = {
+    "caliper_stiffness": "caliper stiffness",
+    "valve_resistance": "needle-valve resistance",
+    "effective_hydraulic_stiffness": "seal stiffness k_eh (from the seal values)",
+    "effective_hydraulic_damping": "seal damping c_eh (from the seal values)",
+    "air_fraction": "fluid air fraction",
+    "bore_compliance": "bore compliance C_b",
+    "hose_stiffness": "hose wall modulus",
+}
+RIG_CHECKS = {
+    "seal_stick_slip": "the piston seals: wear, swell, groove fill and lubrication",
+    "seal_groove_asymmetry": "the seal grooves: chamfers and the seal's fit on each side",
+    "entrained_air": "air in the hydraulic line: bleed the caliper and the hose",
+    "orifice_flow": "the needle valve: its setting and whether it is partly blocked",
+    "hose_compliance": "the hose: its type, length and age (a hose that swells)",
+    "thermal_drift": "the temperature of fluid and caliper: let the rig warm up, log it",
+    "sensor_delay": "the DAQ channel of the late sensor: its filter and sample timing",
+    "eccentric_load": "the caliper's alignment and the washers' seating (uneven load)",
+    "bore_friction": "the piston bores: scoring, dirt, alignment of the pistons",
+}
+"""What to look at on the rig for each effect (test: one per catalogue entry)."""
 
 
-def write_report(diagnosis: Diagnosis, out: Path) -> Path:
-    """Write ``report.html`` and its PNG figures into ``out``; return the page's path."""
+def write_report(diagnosis: Diagnosis, out: Path, rig_path: Path | None = None) -> Path:
+    """Write ``report.html`` and its PNG figures into ``out``; return the page's path.
+
+    Args:
+        diagnosis: what :func:`~brake_hil.diagnosis.diagnose.diagnose` found.
+        out: the folder (made if missing).
+        rig_path: the nominal rig file the diagnosis used, named on the page.
+    """
     out.mkdir(parents=True, exist_ok=True)
     figures = [
         _time_plot(diagnosis, out / "held_out.png"),
@@ -39,8 +103,133 @@ def write_report(diagnosis: Diagnosis, out: Path) -> Path:
         _loop_plot(diagnosis, out / "hysteresis.png"),
     ]
     page = out / "report.html"
-    page.write_text(_html(diagnosis, [f.name for f in figures]), encoding="utf-8")
+    page.write_text(_html(diagnosis, [f.name for f in figures], rig_path), encoding="utf-8")
     return page
+
+
+# --------------------------------------------------------------------------- words
+
+
+@dataclass(frozen=True)
+class Finding:
+    """A calibration multiplier far outside its prior: the rig file's value looks off."""
+
+    name: str  # multiplier name
+    multiplier: float  # what the data say over the rig file's value
+    sigmas: float  # prior sigmas from 1
+
+    @property
+    def words(self) -> str:
+        """E.g. ``caliper stiffness in the rig file looks 18 % high``."""
+        what = MULTIPLIER_WORDS.get(self.name, self.name.replace("_", " "))
+        off = 1.0 / self.multiplier - 1.0  # file over data, minus one
+        direction = "high" if off > 0 else "low"
+        return (
+            f"{what} in the rig file looks {100 * abs(off):.0f} % {direction} (the data put "
+            f"it at {self.multiplier:.2f} of the file's value, {abs(self.sigmas):.1f} sigma "
+            "outside the tolerance the rig file states)"
+        )
+
+
+def findings(multipliers: dict[str, float], sigmas: dict[str, float]) -> list[Finding]:
+    """Multipliers at least :data:`FLAG_SIGMA` prior sigmas from 1, farthest first.
+
+    Args:
+        multipliers: fitted over nominal, by name.
+        sigmas: the prior's log-sigma of each (the rig file's tolerance).
+    """
+    found = [
+        Finding(name, value, _sigmas(value, sigmas[name])) for name, value in multipliers.items()
+    ]
+    return sorted((f for f in found if abs(f.sigmas) >= FLAG_SIGMA), key=lambda f: -abs(f.sigmas))
+
+
+def _sigmas(multiplier: float, sigma: float) -> float:
+    return math.log(multiplier) / sigma if multiplier > 0 and sigma > 0 else 0.0
+
+
+def improved_multipliers(diagnosis: Diagnosis) -> dict[str, float]:
+    """The calibration multipliers the improved model was fitted with (the verdict's)."""
+    parameters = diagnosis.improved.parameters()
+    return {
+        name: parameters.get(f"calibration.{name}", value)
+        for name, value in diagnosis.calibration.multipliers.items()
+    }
+
+
+def calibration_findings(diagnosis: Diagnosis) -> list[Finding]:
+    """The improved model's multipliers far outside the rig file's tolerances."""
+    return findings(improved_multipliers(diagnosis), diagnosis.calibration.sigmas)
+
+
+def identified(value: float, sigma: float) -> bool:
+    """True when the data pin a parameter down: a finite sigma under half its value."""
+    return math.isfinite(sigma) and sigma < IDENTIFIED_RELATIVE_SIGMA * abs(value)
+
+
+def _text(raw: str) -> str:
+    """HTML of a plain text; ``code`` in double backticks as <code>."""
+    escaped = html.escape(raw)
+    return re.sub(r"``(.+?)``", r"<code>\1</code>", escaped).replace("``", "")
+
+
+def _confidence_words(confidence: float) -> str:
+    if confidence >= 0.9:
+        return "high"
+    if confidence >= 0.7:
+        return "moderate: check the runner-up below"
+    return "low: treat the verdict as a hint, not a finding"
+
+
+def _percent(value: float) -> str:
+    return f"{100 * value:.2f} %"
+
+
+def _summary(diagnosis: Diagnosis, findings: list[Finding]) -> str:
+    effects = [e for e in diagnosis.effects if e in CATALOGUE]
+    before, after = diagnosis.baseline_metrics, diagnosis.improved_metrics
+    worst = max(before, key=lambda k: before[k]["nrmse"])
+    items = []
+    if effects:
+        titles = "; ".join(f"{CATALOGUE[e].title} (<code>{e}</code>)" for e in effects)
+        items.append(f"<b>What was wrong:</b> the rig file's LTI model leaves out {titles}.")
+        physics = " ".join(_text(CATALOGUE[e].physics) for e in effects)
+        items.append(f"<b>The physics:</b> {physics}")
+        items.append(
+            f"<b>How much better:</b> on cycles no fit saw, {worst} NRMSE "
+            f"{_percent(before[worst]['nrmse'])} with the calibrated LTI model, "
+            f"{_percent(after[worst]['nrmse'])} with the improved one "
+            f"(peak-to-peak {before[worst]['ptp_ratio_pct']:.1f} % -> "
+            f"{after[worst]['ptp_ratio_pct']:.1f} % of measured)."
+        )
+    elif "unexplained" in diagnosis.effects:
+        items.append(
+            "<b>What was wrong:</b> the LTI model misses the recording by more than its noise, "
+            f"and none of the {len(CANDIDATES)} candidate physics explains it "
+            f"({worst} NRMSE {_percent(before[worst]['nrmse'])}). Something outside the "
+            "library: look at the sensors' calibration and the rig's build."
+        )
+    else:
+        items.append(
+            "<b>What was wrong:</b> nothing the data can show: the calibrated LTI model "
+            f"explains the recording (worst channel {worst}, NRMSE "
+            f"{_percent(before[worst]['nrmse'])})."
+        )
+    items.append(
+        f"<b>How sure:</b> {_confidence_words(diagnosis.confidence)} "
+        f"(confidence {diagnosis.confidence:.2f})."
+    )
+    checks = [RIG_CHECKS[e] for e in effects if e in RIG_CHECKS]
+    checks += [f.words for f in findings]
+    if checks:
+        listed = "".join(f"<li>{_text(c)}</li>" for c in checks)
+        items.append(f"<b>What to check on the rig:</b><ul>{listed}</ul>")
+    else:
+        items.append("<b>What to check on the rig:</b> nothing stands out.")
+    return "<ul class=summary>" + "".join(f"<li>{i}</li>" for i in items) + "</ul>"
+
+
+# --------------------------------------------------------------------------- figures
 
 
 def _held_out_signals(diagnosis: Diagnosis) -> dict[str, dict[str, np.ndarray]]:
@@ -66,15 +255,22 @@ def _time_plot(diagnosis: Diagnosis, path: Path) -> Path:
     for column, key in enumerate(OUTPUT_CHANNELS):
         unit, scale = UNITS[key]
         top, bottom = axes[0, column], axes[1, column]
-        for label in ("measured", "baseline", "improved"):
-            style = "-" if label == "measured" else "--"
+        top.plot(
+            time[shown],
+            data["measured"][key][shown] * scale,
+            color=COLOURS["measured"],
+            lw=3.0,
+            alpha=0.45,
+            label="measured",
+        )
+        for label in ("baseline", "improved"):
             top.plot(
                 time[shown],
                 data[label][key][shown] * scale,
-                style,
+                "--",
                 color=COLOURS[label],
                 label=label,
-                lw=1.3,
+                lw=1.4,
             )
         for label in ("baseline", "improved"):
             bottom.plot(
@@ -84,20 +280,20 @@ def _time_plot(diagnosis: Diagnosis, path: Path) -> Path:
                 lw=1.0,
                 label=label,
             )
-        top.set_title(f"{key}, held-out cycles", fontsize=10)
+        top.set_title(f"{key}, held-out cycles", fontsize=11)
         top.set_ylabel(unit)
         bottom.set_ylabel(f"residual, {unit}")
         bottom.set_xlabel("time, s")
         bottom.axhline(0.0, color="grey", lw=0.8)
         for axis in (top, bottom):
             axis.grid(alpha=0.3)
-        top.legend(fontsize=8)
+        top.legend(fontsize=LEGEND_SIZE)
     figure.suptitle("measured vs baseline (calibrated LTI) vs improved, on data not fitted")
     return _save(figure, path)
 
 
 def _phase_plot(diagnosis: Diagnosis, path: Path) -> Path:
-    figure, axis = plt.subplots(figsize=(7, 4))
+    figure, axis = plt.subplots(figsize=(8, 4.5))
     degrees = (np.arange(PHASE_BINS) + 0.5) * 360.0 / PHASE_BINS
     for key, profile in diagnosis.evidence.phase_profile.items():
         axis.plot(degrees, 100 * np.array(profile), marker="o", ms=3, label=key)
@@ -105,15 +301,19 @@ def _phase_plot(diagnosis: Diagnosis, path: Path) -> Path:
     axis.set_ylabel("baseline RMS residual, % of ptp")
     axis.set_title("where in the 5 Hz cycle the baseline misses")
     axis.grid(alpha=0.3)
-    axis.legend()
+    axis.legend(fontsize=LEGEND_SIZE)
     return _save(figure, path)
 
 
 def _harmonics_plot(diagnosis: Diagnosis, path: Path) -> Path:
     harmonics = diagnosis.evidence.harmonics
     keys = list(harmonics.get("measured", {}))
-    figure, axes = plt.subplots(1, len(keys), figsize=(4 * max(len(keys), 1), 3.6))
-    axes = np.atleast_1d(axes)
+    columns = 2
+    rows = max(1, math.ceil(len(keys) / columns))
+    figure, axes = plt.subplots(rows, columns, figsize=(12, 3.8 * rows), squeeze=False)
+    axes = axes.ravel()
+    for spare in axes[len(keys) :]:
+        spare.axis("off")
     for axis, key in zip(axes, keys):
         measured = np.array(harmonics["measured"][key])[1:]
         predicted = np.array(harmonics["predicted"][key])[1:]
@@ -121,37 +321,62 @@ def _harmonics_plot(diagnosis: Diagnosis, path: Path) -> Path:
         axis.bar(orders - 1, measured, width=2, color="black", label="measured")
         axis.bar(orders + 1, predicted, width=2, color="tab:blue", label="baseline")
         axis.set_xticks(orders)
-        axis.set_title(f"{key}: super-harmonics (seed Table 1)", fontsize=9)
+        axis.set_title(f"{key}: super-harmonics (seed Table 1)", fontsize=10)
         axis.set_xlabel("Hz")
         axis.set_ylabel("% of energy at 5-25 Hz")
-        axis.legend(fontsize=7)
+        axis.legend(fontsize=LEGEND_SIZE)
     return _save(figure, path)
+
+
+def _seal_loop(
+    diagnosis: Diagnosis, signals_of: dict[str, np.ndarray]
+) -> tuple[np.ndarray, np.ndarray]:
+    """Seal displacement ``x_s = F_k / k_k - x_c`` (m) and force ``F_s = A_ep p_b - F_k`` (N).
+
+    The seed's characterisation (eq. 21e without the piston's small inertia), from the
+    30 Hz low-passed signals, so a stick-slip parallelogram keeps its corners.
+    """
+    window = diagnosis.dataset.held_out[0]
+    parameters = diagnosis.calibration.parameters(window.mean_pressure)
+    x_s = signals_of["F_k"] / parameters.block_stiffness - signals_of["x_c"]
+    f_s = parameters.piston_area * signals_of["p_b"] - signals_of["F_k"]
+    return x_s - x_s.mean(), f_s - f_s.mean()
 
 
 def _loop_plot(diagnosis: Diagnosis, path: Path) -> Path:
     data = _held_out_signals(diagnosis)
-    rate = 1.0 / diagnosis.dataset.sample_time
-    figure, axis = plt.subplots(figsize=(6, 5))
-    samples = int(round(diagnosis.dataset.period * rate))
+    figure, axis = plt.subplots(figsize=(7, 5.5))
+    samples = int(round(2 * diagnosis.dataset.period / diagnosis.dataset.sample_time))
     for label in ("measured", "baseline", "improved"):
-        x_c = signals.bandpass(data[label]["x_c"], rate)
-        f_k = signals.bandpass(data[label]["F_k"], rate)
-        middle = x_c.size // 2
+        x_s, f_s = _seal_loop(diagnosis, data[label])
+        middle = x_s.size // 2
         part = slice(middle, middle + samples)
-        axis.plot(x_c[part] * 1e6, f_k[part] * 1e-3, color=COLOURS[label], label=label)
-    axis.set_xlabel("x_c (4-6 Hz), um")
-    axis.set_ylabel("F_k (4-6 Hz), kN")
-    axis.set_title("hysteresis loop, one held-out cycle")
+        measured = label == "measured"
+        axis.plot(
+            x_s[part] * 1e6,
+            f_s[part],
+            "-" if measured else "--",
+            color=COLOURS[label],
+            lw=3.0 if measured else 1.4,
+            alpha=0.45 if measured else 1.0,
+            label=label,
+        )
+    axis.set_xlabel("seal displacement x_s = F_k/k_k - x_c, um (mean removed)")
+    axis.set_ylabel("seal force F_s = A_ep p_b - F_k, N (mean removed)")
+    axis.set_title("seal hysteresis loop, two held-out cycles")
     axis.grid(alpha=0.3)
-    axis.legend()
+    axis.legend(fontsize=LEGEND_SIZE)
     return _save(figure, path)
 
 
 def _save(figure: Figure, path: Path) -> Path:
     figure.tight_layout()
-    figure.savefig(path, dpi=85)
+    figure.savefig(path, dpi=DPI)
     plt.close(figure)
     return path
+
+
+# --------------------------------------------------------------------------- tables
 
 
 def _metrics_table(diagnosis: Diagnosis) -> str:
@@ -162,50 +387,140 @@ def _metrics_table(diagnosis: Diagnosis) -> str:
         rows.append(
             f"<tr><td>{key}</td><td>{b['ptp_ratio_pct']:.1f}</td><td>{i['ptp_ratio_pct']:.1f}</td>"
             f"<td>{b['tau_over_T_pct']:+.2f}</td><td>{i['tau_over_T_pct']:+.2f}</td>"
-            f"<td>{b['nrmse']:.4f}</td><td>{i['nrmse']:.4f}</td></tr>"
+            f"<td>{100 * b['nrmse']:.2f}</td><td>{100 * i['nrmse']:.2f}</td></tr>"
         )
     return (
+        f"<p>{NRMSE_DEFINITION}</p>"
         "<table><tr><th>channel</th><th>ptp % baseline</th><th>ptp % improved</th>"
-        "<th>tau/T % baseline</th><th>tau/T % improved</th><th>NRMSE baseline</th>"
-        "<th>NRMSE improved</th></tr>" + "".join(rows) + "</table>"
+        "<th>tau/T % baseline</th><th>tau/T % improved</th><th>NRMSE % baseline</th>"
+        "<th>NRMSE % improved</th></tr>" + "".join(rows) + "</table>"
     )
 
 
-def _html(diagnosis: Diagnosis, figures: list[str]) -> str:
+def _parameter_cells(fit: Fit) -> tuple[str, str]:
+    """The hypothesis's own parameters: identified (value ± sigma unit), and not."""
+    sigmas = fit.uncertainties()
+    known, unknown = [], []
+    for name, value, unit in zip(fit.parameter_names, fit.theta, fit.parameter_units):
+        if name.startswith("calibration."):
+            continue
+        short = name.split(".", 1)[-1]
+        sigma = sigmas.get(name, float("nan"))
+        if identified(float(value), sigma):
+            shown_unit = "" if unit in ("", "-") else f" {unit}"
+            known.append(f"{short} = {value:.4g} ± {sigma:.2g}{shown_unit}")
+        else:
+            unknown.append(short)
+    return (
+        "<br>".join(html.escape(k) for k in known) or "-",
+        html.escape(", ".join(unknown)) or "-",
+    )
+
+
+def _hypotheses_table(diagnosis: Diagnosis) -> str:
+    base = diagnosis.baseline.held_out_cost
+    verdict = _verdict(diagnosis)
+    chosen = verdict.chosen
+    rows = []
+    ranked = sorted(diagnosis.hypotheses, key=lambda h: h.held_out_cost)
+    for fit in ranked:
+        known, unknown = _parameter_cells(fit)
+        note = hypothesis_note(diagnosis.summary, fit.effects, verdict)
+        mark = ' class="verdict"' if fit.effects == chosen else ""
+        rows.append(
+            f"<tr{mark}><td>{' + '.join(fit.effects)}</td>"
+            f"<td>{ratio(base, fit.held_out_cost):.1f}</td><td>{html.escape(note)}</td>"
+            f"<td>{known}</td><td>{unknown}</td></tr>"
+        )
+    top = ranked[0] if ranked else None
+    lead = ""
+    if top is not None and top.effects != chosen:
+        note = hypothesis_note(diagnosis.summary, top.effects, verdict)
+        lead = (
+            f"<p class=why><b>Why the top row is not the verdict:</b> "
+            f"{' + '.join(top.effects)} is {html.escape(note)}.</p>"
+        )
+    return (
+        f"{lead}<table><tr><th>hypothesis</th><th>held-out error cut (x)</th>"
+        "<th>decision</th><th>parameters the data identified (± one sigma)</th>"
+        "<th>not identified (sigma over half the value)</th></tr>" + "".join(rows) + "</table>"
+    )
+
+
+def _verdict(diagnosis: Diagnosis) -> Verdict:
+    """The decision as :func:`~brake_hil.diagnosis.diagnose.decide` returned it."""
+    named = diagnosis.effects and diagnosis.effects != ("unexplained",)
+    chosen = diagnosis.improved.effects if named else None
+    return Verdict(diagnosis.effects, diagnosis.confidence, chosen)
+
+
+def _calibration_table(diagnosis: Diagnosis, flagged: list[Finding]) -> str:
+    sigmas = diagnosis.calibration.sigmas
+    lti_only = diagnosis.calibration.multipliers
+    final = improved_multipliers(diagnosis)
+    named = {f.name: f for f in flagged}
+    physics = bool(diagnosis.effects) and diagnosis.effects != ("unexplained",)
+    rows = []
+    for name, sigma in sigmas.items():
+        before, after = lti_only[name], final[name]
+        z_before, z_after = _sigmas(before, sigma), _sigmas(after, sigma)
+        if name in named:
+            words = _text(named[name].words)
+        elif physics and abs(z_before) >= FLAG_SIGMA:
+            words = (
+                f"within its tolerance once {' + '.join(diagnosis.effects)} is modelled; the "
+                "LTI-only calibration moved it to stand in for the missing physics"
+            )
+        elif abs(z_after) >= 2.0:
+            words = "at the edge of its tolerance"
+        else:
+            words = "within its tolerance"
+        rows.append(
+            f"<tr><td>{html.escape(MULTIPLIER_WORDS.get(name, name))}</td>"
+            f"<td>x{before:.3f} ({z_before:+.1f})</td><td>x{after:.3f} ({z_after:+.1f})</td>"
+            f"<td>{words}</td></tr>"
+        )
+    return (
+        "<p>Multipliers of the rig file's values (1: the file is right; in brackets, sigmas "
+        "of the tolerance the rig file states), fitted with the LTI model alone and with "
+        f"the verdict's physics. At {FLAG_SIGMA:g} sigma or more with the verdict's "
+        "physics, the rig file's value is itself a finding.</p>"
+        "<table><tr><th>value</th><th>LTI model alone</th><th>with the verdict's physics"
+        "</th><th>finding</th></tr>" + "".join(rows) + "</table>"
+    )
+
+
+def _html(diagnosis: Diagnosis, figures: list[str], rig_path: Path | None) -> str:
     verdict = ", ".join(diagnosis.effects) or "no missing physics"
-    evidence = "".join(f"<li>{html.escape(line)}</li>" for line in diagnosis.evidence.findings)
-    hypotheses = []
-    baseline_cost = diagnosis.baseline.held_out_cost
-    for fit in sorted(diagnosis.hypotheses, key=lambda h: h.held_out_cost):
-        params = ", ".join(
-            f"{name} = {value:.4g} ± {fit.uncertainties().get(name, float('nan')):.2g} {unit}"
-            for name, value, unit in zip(fit.parameter_names, fit.theta, fit.parameter_units)
-        )
-        hypotheses.append(
-            f"<tr><td>{' + '.join(fit.effects)}</td>"
-            f"<td>{baseline_cost / max(fit.held_out_cost, 1e-15):.2f}</td>"
-            f"<td>{html.escape(params)}</td></tr>"
-        )
-    calibration = ", ".join(
-        f"{name} x{value:.3f} ({diagnosis.calibration.prior_z()[name]:+.1f} sigma)"
-        for name, value in diagnosis.calibration.multipliers.items()
+    findings = calibration_findings(diagnosis)
+    evidence = "".join(f"<li>{_text(line)}</li>" for line in diagnosis.evidence.findings)
+    ds = diagnosis.dataset
+    length = float(ds.time[-1] - ds.time[0] + ds.sample_time)
+    images = "".join(
+        f'<p><img src="{name}" alt="{name}" style="max-width:100%"></p>' for name in figures
     )
-    images = "".join(f'<p><img src="{name}" style="max-width:100%"></p>' for name in figures)
+    when = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
+    rig = html.escape(str(rig_path)) if rig_path is not None else "not given"
     return f"""<!DOCTYPE html>
-<html><head><meta charset="utf-8"><title>brake_hil diagnosis</title>
-<style>body{{font-family:sans-serif;max-width:1200px;margin:auto}}
-td,th{{border:1px solid #ccc;padding:3px 8px}}table{{border-collapse:collapse}}</style>
+<html><head><meta charset="utf-8"><title>brake_hil diagnosis: {html.escape(verdict)}</title>
+<style>body{{font-family:sans-serif;max-width:1200px;margin:auto;line-height:1.4}}
+td,th{{border:1px solid #ccc;padding:3px 8px;vertical-align:top}}
+table{{border-collapse:collapse}}tr.verdict{{background:#e8f4e8;font-weight:bold}}
+p.why{{background:#fff6e0;padding:6px}}ul.summary li{{margin:4px 0}}
+.meta{{color:#444}}</style>
 </head><body>
 <h1>Diagnosis: {html.escape(verdict)}</h1>
-<p><b>Recording:</b> {html.escape(diagnosis.recording)}<br>
-<b>Confidence:</b> {diagnosis.confidence:.2f}<br>
-{html.escape(diagnosis.explanation)}</p>
+<p class=meta><b>Recording:</b> {html.escape(diagnosis.recording)} ({length:.1f} s)<br>
+<b>Rig file:</b> {rig}<br>
+<b>Made:</b> {when} by brake_hil {__version__}</p>
+<h2>In short</h2>
+{_summary(diagnosis, findings)}
+<p>{_text(diagnosis.explanation)}</p>
 <h2>Seed metrics on held-out data (Tables 4-5)</h2>{_metrics_table(diagnosis)}
 {images}
 <h2>Evidence</h2><ul>{evidence}</ul>
-<h2>Calibrated baseline (multipliers of the nominal rig)</h2><p>{html.escape(calibration)}</p>
-<h2>Hypotheses (held-out improvement of mean squared error)</h2>
-<table><tr><th>effect</th><th>improvement</th><th>parameters (± one sigma)</th></tr>
-{"".join(hypotheses)}</table>
+<h2>Calibration: is the rig file right?</h2>{_calibration_table(diagnosis, findings)}
+<h2>Hypotheses (held-out mean squared error, baseline over hypothesis)</h2>
+{_hypotheses_table(diagnosis)}
 </body></html>
 """

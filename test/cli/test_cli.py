@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import html
 import json
 from pathlib import Path
+import re
 import shutil
 import subprocess
 import sys
@@ -11,12 +13,14 @@ import sys
 import numpy as np
 import pytest
 
+from brake_hil import __version__
 from brake_hil.analysis.comparison import predict
 from brake_hil.io.recording_writer import write_recording
 from brake_hil.physics.catalogue import effect_names
 from brake_hil.physics.excitation import pulsing_profile
 from brake_hil.physics.parameters import derive_parameters
 from brake_hil.physics.rig import Rig
+from brake_hil.report.diagnosis_report import NRMSE_DEFINITION
 from brake_hil.topics import (
     BLOCK_FORCE,
     BORE_PRESSURE,
@@ -28,13 +32,14 @@ from test.conftest import CONFIG, PEER_DATA
 RIG = CONFIG / "rig_default.yaml"
 
 
-def brake_hil(*args: str | Path) -> subprocess.CompletedProcess[str]:
+def brake_hil(*args: str | Path, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
     """Run the console entry point as a user would, in a fresh interpreter."""
     return subprocess.run(
         [sys.executable, "-m", "brake_hil.cli", *map(str, args)],
         capture_output=True,
         text=True,
         timeout=120,
+        cwd=cwd,
     )
 
 
@@ -274,8 +279,21 @@ def test_diagnose_on_a_parameter_error_only_finds_no_missing_physics(tmp_path: P
         "4",
     )
     assert made.returncode == 0, made.stderr
-    result = brake_hil("diagnose", bag, "--rig", RIG, "--out", tmp_path / "d")
+    (tmp_path / "rec.rig.yaml").write_text(RIG.read_text())  # the rig file beside the bag
+    # Without --rig and --out: RECORDING.rig.yaml beside it, out/<recording name>/.
+    result = brake_hil("diagnose", "rec/", cwd=tmp_path)
     assert result.returncode == 0, result.stderr
+    assert "rig file: rec.rig.yaml (beside the recording" in result.stdout
+    assert "output folder: out/rec (" in result.stdout
+    # stderr is no terminal: progress as lines (no carriage returns), never past its total.
+    assert "\r" not in result.stderr
+    steps = [
+        tuple(map(int, m))
+        for m in re.findall(r"diagnose: +\d+%\|[^|]*\| (\d+)/(\d+)", result.stderr)
+    ]
+    assert steps and all(done <= total for done, total in steps), result.stderr
+    assert steps[-1][0] == steps[-1][1]
+    (tmp_path / "d").symlink_to(tmp_path / "out" / "rec")
     diagnosis = json.loads((tmp_path / "d" / "diagnosis.json").read_text())
     assert diagnosis["verdict"]["effects"] == []
     assert set(diagnosis["baseline"]["metrics"]) == {"p_b", "F_k", "x_c"}
@@ -285,6 +303,27 @@ def test_diagnose_on_a_parameter_error_only_finds_no_missing_physics(tmp_path: P
     assert multipliers["caliper_stiffness"] == pytest.approx(3.4e7 / 4.0e7, rel=0.03)
     for name in ("report.html", "improved_model.json", "held_out.png", "harmonics.png"):
         assert (tmp_path / "d" / name).stat().st_size > 500, name
+    _check_report(tmp_path / "d" / "report.html")
+
+
+def _check_report(page: Path) -> None:
+    """What a reader of report.html must find (issue 12)."""
+    text = html.unescape(page.read_text())
+    assert text.count(NRMSE_DEFINITION) == 1  # one NRMSE, defined once
+    assert "fits' measure, not the seed's per-cycle NRMSE" in text  # the other is not NRMSE
+    assert "``" not in text
+    assert text.index("In short") < text.index("Seed metrics") < text.index("Hypotheses")
+    assert "rec.rig.yaml" in text and f"brake_hil {__version__}" in text
+    assert re.search(r"<b>Recording:</b> \S+ \(\d+\.\d s\)", text)  # its length
+    # The top row (best held-out fit) is not the verdict (none): the page says why.
+    assert "Why the top row is not the verdict:" in text
+    images = re.findall(r'<img src="([^"]+)"', text)
+    assert len(images) == 4
+    for name in images:
+        png = (page.parent / name).read_bytes()
+        assert png[:8] == b"\x89PNG\r\n\x1a\n", name
+        width = int.from_bytes(png[16:20], "big")
+        assert width >= 900, (name, width)  # 130 dpi: readable legends
 
 
 @pytest.mark.parametrize("command", ["diagnose", "benchmark"])

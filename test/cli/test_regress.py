@@ -77,3 +77,23 @@ def test_bad_input_exits_2_with_one_line_naming_the_file(tmp_path: Path) -> None
     bad_baseline.write_text("[]")
     result = regress(BAG, "--baseline", bad_baseline, "--model", CONFIG / "rig_default.yaml")
     assert result.returncode == 2 and str(bad_baseline) in result.stderr
+
+
+def test_a_recording_without_steady_pulsing_is_skipped_with_a_note(tmp_path: Path) -> None:
+    ramp = PROJECT / "bags" / "ramp_one_washer"
+    result = regress(ramp, BAG, "--baseline", PROJECT / "bags" / "baseline.json")
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert "ramp_one_washer: skipped, no steady 5 Hz pulsing to score" in result.stdout
+    assert not any(line.startswith("ramp_one_washer ") for line in result.stdout.splitlines())
+    # A baseline that scored it once: now it does not score, that is a failure.
+    baseline = json.loads((PROJECT / "bags" / "baseline.json").read_text())
+    baseline["bags"]["ramp_one_washer"] = baseline["bags"]["one_washer_lti"]
+    baseline["model_file"] = str(CONFIG / "rig_default.yaml")
+    copy = tmp_path / "bags" / "baseline.json"
+    copy.parent.mkdir()
+    copy.write_text(json.dumps(baseline))
+    shutil.copytree(ramp, tmp_path / "bags" / "ramp_one_washer")
+    lost = regress(tmp_path / "bags" / "ramp_one_washer", "--baseline", copy)
+    assert lost.returncode == 1, lost.stdout + lost.stderr
+    assert "(in the baseline: FAILED)" in lost.stdout
+    assert "every metric within its tolerance" not in lost.stdout

@@ -11,7 +11,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import json
+from operator import attrgetter
 from pathlib import Path
+import re
 import time
 from typing import Any
 
@@ -270,3 +272,42 @@ def test_recorded_mcap_holds_every_sample_and_prediction(recorded_run: ChainRun)
         assert [stamp(m) for m in predicted] == [stamp(m) for m in ordered], f"{name}: {detail}"
         live = np.array([read(m) for m in predicted])
         assert np.max(np.abs(live - offline)) <= 1e-9 * np.ptp(offline), name
+
+
+LAYOUT = PROJECT / "config" / "foxglove_layout.json"
+
+
+def _layout_references(layout: dict[str, Any]) -> tuple[set[str], set[str], set[str]]:
+    """Topics, ``topic.field`` paths and status names the Foxglove layout's panels use."""
+    topics, fields, names = set(), set(), set()
+    for panel in layout["configById"].values():
+        values = [p["value"] for p in panel.get("paths", [])]
+        values += [panel[k] for k in ("topicPath", "topicToRender") if k in panel]
+        for value in values:
+            topic, _, rest = value.partition(".")
+            topics.add(topic)
+            names.update(re.findall(r'name=="([^"]+)"', rest))
+            if rest and "{" not in rest:
+                fields.add(value)
+    return topics, fields, names
+
+
+def test_the_foxglove_layout_shows_topics_fields_and_statuses_of_a_real_recording(
+    recorded_run: ChainRun,
+) -> None:
+    assert recorded_run.bag is not None
+    layout = json.loads(LAYOUT.read_text())
+    topics, fields, names = _layout_references(layout)
+    messages = _mcap_messages(recorded_run.bag)
+    assert topics <= set(messages), topics - set(messages)
+    for spec in (*MEASURED_OUTPUTS, *PREDICTED_OUTPUTS):  # measured vs predicted, each channel
+        assert f"{spec.name}.{spec.field}" in fields
+    for path in fields:  # every plotted field holds a number in the recording
+        topic, _, field = path.partition(".")
+        assert isinstance(attrgetter(field)(messages[topic][0]), float), path
+    recorded_names = {s.name for m in messages["/brake/comparison"] for s in m.status}
+    assert names and names <= recorded_names, names - recorded_names
+    assert "/diagnostics" in topics
+    # Every panel the mosaic places exists, and every panel is placed.
+    placed = set(re.findall(r'"([A-Za-z]+![^"]+)"', json.dumps(layout["layout"])))
+    assert placed == set(layout["configById"])

@@ -1,0 +1,80 @@
+"""Progress of long commands on stderr: a tqdm bar in a terminal, a line every few seconds not.
+
+In a terminal the bar redraws in place (every second at least, so the elapsed time moves
+while one step takes long). When stderr is not a terminal (CI, ``| tee``, a log file) every
+redraw is its own line, at most one per :data:`LINE_INTERVAL_S` seconds and at least one
+every :data:`LINE_INTERVAL_S` seconds while the work runs, so a log shows that it is alive.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import contextmanager
+import sys
+import threading
+from typing import IO
+
+from tqdm import tqdm
+
+__all__ = ["LINE_INTERVAL_S", "progress_bar"]
+
+LINE_INTERVAL_S = 5.0
+"""Seconds between progress lines when stderr is not a terminal."""
+
+
+class _Lines:
+    """A file for tqdm that writes each redraw as one line (no carriage returns)."""
+
+    def __init__(self, stream: IO[str]) -> None:
+        self._stream = stream
+
+    def write(self, text: str) -> None:
+        line = text.replace("\r", "").rstrip()
+        if line:
+            self._stream.write(line + "\n")
+
+    def flush(self) -> None:
+        self._stream.flush()
+
+
+@contextmanager
+def progress_bar(
+    total: float, desc: str, unit: str, stream: IO[str] | None = None, **options: object
+) -> Iterator[tqdm]:  # type: ignore[type-arg]
+    """A tqdm bar on ``stream`` (stderr) that also redraws on a timer (see the module).
+
+    Args:
+        total: the work's size, in ``unit``.
+        desc: the bar's label.
+        unit: what one step is (``"step"``, ``"case"``, ``"s"``).
+        stream: where it goes (default ``sys.stderr``).
+        **options: more tqdm options (``bar_format``, ...).
+    """
+    target = sys.stderr if stream is None else stream
+    terminal = target.isatty()
+    interval = 1.0 if terminal else LINE_INTERVAL_S
+    bar = tqdm(
+        total=total,
+        desc=desc,
+        unit=unit,
+        file=target if terminal else _Lines(target),
+        mininterval=0.1 if terminal else LINE_INTERVAL_S,
+        ascii=None if terminal else True,
+        dynamic_ncols=terminal,
+        ncols=None if terminal else 100,
+        **options,  # type: ignore[arg-type]
+    )
+    stop = threading.Event()
+
+    def tick() -> None:
+        while not stop.wait(interval):
+            bar.refresh()
+
+    timer = threading.Thread(target=tick, name="progress", daemon=True)
+    timer.start()
+    try:
+        yield bar
+    finally:
+        stop.set()
+        timer.join()
+        bar.close()

@@ -1,0 +1,92 @@
+"""Every command block of the README works as written on a clean checkout.
+
+The fast blocks run always; the long ones (the main job, the CAN chain, the benchmarks) only
+with ``BRAKE_HIL_README_LONG=1``. ``bash scripts/test.sh`` is this test suite itself and is
+never run from it. Without ``.venv/`` in the checkout (a developer's worktree), ``.venv/bin/``
+stands for this interpreter's ``python`` and ``brake-hil``, and ``bash scripts/run_chain.sh``
+for the launcher it ``exec``s after its set-up step.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+import re
+import shlex
+import subprocess
+import sys
+
+import pytest
+
+from test.conftest import PROJECT
+
+README = PROJECT / "README.md"
+LONG = ("scripts/main.sh", "--can-emulator", "benchmarks/", "brake-hil cases", "benchmark ")
+NEVER = ("scripts/test.sh",)
+
+
+def readme_commands() -> list[str]:
+    """The command lines of the README's ``bash`` blocks, comments dropped."""
+    blocks = re.findall(r"```bash\n(.*?)```", README.read_text(), flags=re.DOTALL)
+    lines = [line.split(" #")[0].strip() for block in blocks for line in block.splitlines()]
+    return [line for line in lines if line and not line.startswith("#")]
+
+
+def _is_long(command: str) -> bool:
+    return any(marker in command for marker in LONG)
+
+
+def _shim(folder: Path) -> Path:
+    """``python`` and ``brake-hil`` of this interpreter, for a checkout without ``.venv/``."""
+    folder.mkdir(parents=True, exist_ok=True)
+    scripts = {
+        "python": f'exec {shlex.quote(sys.executable)} "$@"\n',
+        "brake-hil": f'exec {shlex.quote(sys.executable)} -m brake_hil.cli "$@"\n',
+    }
+    for name, body in scripts.items():
+        path = folder / name
+        path.write_text("#!/usr/bin/env bash\n" + body)
+        path.chmod(0o755)
+    return folder
+
+
+def _as_run_here(command: str, shim: Path) -> str:
+    if (PROJECT / ".venv" / "bin" / "python").exists():
+        return command
+    command = command.replace(
+        "bash scripts/run_chain.sh", ".venv/bin/python -m brake_hil.nodes.chain"
+    )
+    return command.replace(".venv/bin/", f"{shim}/")
+
+
+def test_the_readme_has_fast_command_blocks() -> None:
+    commands = readme_commands()
+    fast = [c for c in commands if not _is_long(c) and not any(n in c for n in NEVER)]
+    assert any("regress bags/" in c for c in fast)
+    assert any("run_chain.sh" in c for c in fast)
+    assert any("main.sh" in c for c in commands)
+
+
+@pytest.mark.parametrize("command", readme_commands())
+def test_readme_command_works_as_written(command: str, tmp_path: Path) -> None:
+    if any(marker in command for marker in NEVER):
+        pytest.skip("the test suite itself")
+    if _is_long(command) and os.environ.get("BRAKE_HIL_README_LONG") != "1":
+        pytest.skip("long: set BRAKE_HIL_README_LONG=1")
+    env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
+    env["PYTHONPATH"] = str(PROJECT)
+    done = subprocess.run(
+        ["bash", "-c", "set -euo pipefail; " + _as_run_here(command, _shim(tmp_path / "bin"))],
+        cwd=PROJECT,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=1800,
+        check=False,
+    )
+    assert done.returncode == 0, f"{command}\n{done.stdout[-3000:]}\n{done.stderr[-3000:]}"
+    if "regress" in command:
+        assert "every metric within its tolerance" in done.stdout
+        assert "ramp_one_washer: skipped, no steady 5 Hz pulsing to score" in done.stdout
+    if "run_chain.sh" in command:
+        assert "MCAP recording:" in done.stdout
