@@ -6,7 +6,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from brake_hil.analysis.comparison import Comparison, compare
-from brake_hil.app.output import write_json
+from brake_hil.app.output import check_outputs, write_json
 from brake_hil.io.recording_reader import read_recording
 from brake_hil.physics.rig import Rig, load_rig
 from brake_hil.topics import MASTER_CYLINDER_PRESSURE, MEASURED_OUTPUTS
@@ -48,6 +48,7 @@ def run_compare(
         BrakeHilError: a bad rig file or recording, or no steady pulsing (the message names
             the file).
     """
+    check_outputs(json_path, plot_path)
     rig = load_rig(rig_path)
     recording = read_recording(
         recording_path, required=(MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS)

@@ -30,6 +30,7 @@ from rosbags.rosbag2 import Reader
 
 from brake_hil.analysis.recording import Recording
 from brake_hil.errors import MissingTopicError, RecordingError
+from brake_hil.io.recording_checks import check_channel, check_recording_path, unsupported_format
 from brake_hil.io.stamped_cdr import decode_stamped
 from brake_hil.topics import (
     AIR_PRESSURE,
@@ -89,6 +90,7 @@ def _one_line(err: BaseException) -> str:
 
 def _check_path(path: Path) -> None:
     """Refuse a path that cannot hold a recording, before any library sees it."""
+    check_recording_path(path)
     if not path.exists():
         missing = FileNotFoundError(errno.ENOENT, os.strerror(errno.ENOENT), str(path))
         raise _fail(path, "no such file or directory") from missing
@@ -116,6 +118,8 @@ def _open(path: Path) -> Reader:
 def _unreadable(path: Path, err: Exception) -> RecordingError:
     if isinstance(err, OSError):
         return _fail(path, f"cannot read the recording: {_one_line(err)}")
+    if (problem := unsupported_format(path)) is not None:
+        return _fail(path, problem)
     return _fail(path, f"unreadable recording (truncated or corrupt?): {_one_line(err)}")
 
 
@@ -224,6 +228,7 @@ def _decode(path: Path, spec: TopicSpec, messages: Sequence[bytes]) -> _Channel:
             f"{stamps[i]} ns ({_count(repeat.size, 'time')} in all)"
         )
         raise _fail(path, problem)
+    check_channel(path, spec, stamps, values)
     return _Channel(stamps, values)
 
 
