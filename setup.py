@@ -40,7 +40,7 @@ setup(
     ],
     extras_require={
         "ros": ROS_WHEELS,
-        "dev": ["pytest>=7", "ruff>=0.5", "mypy>=1.8", "types-PyYAML"],
+        "dev": ["pytest>=7", "hypothesis>=6", "ruff>=0.5", "mypy>=1.8", "types-PyYAML"],
     },
     zip_safe=True,
     maintainer="brake_hil developers",
