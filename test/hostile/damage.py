@@ -167,3 +167,16 @@ def close_to(
 def read_json(path: Path) -> object:
     """A JSON answer file."""
     return json.loads(path.read_text(encoding="utf-8"))
+
+
+@lru_cache(maxsize=1)
+def full_messages() -> Messages:
+    """All 18 s of ``bags/one_washer_lti`` (three segments), as messages."""
+    recording = read_recording(GOOD_BAG)
+    stamps = recording.start_stamp_ns + np.round(recording.time * 1e9).astype(np.int64)
+    return Messages(
+        {
+            spec: (stamps.copy(), values.copy(), stamps.copy())
+            for spec, values in recording_channels(recording).items()
+        }
+    )
