@@ -95,8 +95,7 @@ def check_input_file(path: Path, what: str, max_bytes: int, error: ErrorType) ->
         raise error(f"{path}: is {kind}, not a {what} (only regular files are read)")
     if info.st_size > max_bytes:
         raise error(
-            f"{path}: {what} of {info.st_size} bytes is larger than the limit of "
-            f"{max_bytes} bytes"
+            f"{path}: {what} of {info.st_size} bytes is larger than the limit of {max_bytes} bytes"
         )
     return info.st_size
 
@@ -159,11 +158,11 @@ def _scan_yaml(text: str, source: Path, error: ErrorType, max_scalar: int) -> No
     """
     depth = 0
     for event in yaml.parse(text, Loader=yaml.SafeLoader):
-        line = event.start_mark.line + 1
+        line = event.start_mark.line + 1 if event.start_mark is not None else 0
         if isinstance(event, yaml.AliasEvent):
             raise error(f"{source}: line {line}: YAML alias '*{event.anchor}' refused")
-        if getattr(event, "anchor", None) is not None:
-            raise error(f"{source}: line {line}: YAML anchor '&{event.anchor}' refused")
+        if (anchor := getattr(event, "anchor", None)) is not None:
+            raise error(f"{source}: line {line}: YAML anchor '&{anchor}' refused")
         if isinstance(event, yaml.CollectionStartEvent):
             depth += 1
             if depth > MAX_DEPTH:

@@ -68,7 +68,7 @@ def uncertain_values(rig: Rig) -> tuple[Uncertain, ...]:
     (interface.md: tolerance 0 means known exactly): it is left out of the calibration and
     of every candidate's fit.
     """
-    values = UNCERTAIN
+    values: tuple[Uncertain, ...] = UNCERTAIN
     if "C_b" in rig.model_overrides:
         values = tuple(BORE_COMPLIANCE if u.name == "air_fraction" else u for u in UNCERTAIN)
     return tuple(u for u in values if rig.tolerance(u.tolerance_key) > 0.0)

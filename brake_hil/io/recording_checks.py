@@ -223,7 +223,7 @@ def check_channel(path: Path, spec: TopicSpec, stamps_ns: IntArray, values: Floa
         raise _fail(
             path,
             f"topic {spec.name} has a gap of {steps[i] / 1e9:.6g} s at "
-            f"{(int(stamps_ns[i]) - origin) / 1e9:.6f} s into the topic (after sample {i}; more than "
-            f"{MAX_GAP_PERIODS:g} sample periods of {period_ns / 1e6:.4g} ms; "
+            f"{(int(stamps_ns[i]) - origin) / 1e9:.6f} s into the topic (after sample {i}; "
+            f"more than {MAX_GAP_PERIODS:g} sample periods of {period_ns / 1e6:.4g} ms; "
             f"{gaps.size} gaps in all): gaps are not bridged, split the recording there",
         )

@@ -297,8 +297,7 @@ def _check_mapping(
 def _check_number(value: object, bound: Bound, source: str, dotted: str) -> float | int:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise RigError(
-            f"{source}: rig key '{dotted}' must be a number in {bound.unit}, "
-            f"got {_shown(value)}"
+            f"{source}: rig key '{dotted}' must be a number in {bound.unit}, got {_shown(value)}"
         )
     if not finite(value):
         raise RigError(
@@ -306,9 +305,7 @@ def _check_number(value: object, bound: Bound, source: str, dotted: str) -> floa
             f"got {_shown(value)}"
         )
     if bound.integer and float(value) != int(value):
-        raise RigError(
-            f"{source}: rig key '{dotted}' must be a whole number, got {_shown(value)}"
-        )
+        raise RigError(f"{source}: rig key '{dotted}' must be a whole number, got {_shown(value)}")
     number = float(value)
     if not bound.low <= number <= bound.high:
         raise RigError(

@@ -15,7 +15,6 @@ import os
 from pathlib import Path
 import sys
 
-import numpy as np
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 
@@ -66,8 +65,7 @@ def _rig_cases(folder: Path, good_bag: Path) -> list[Case]:
         return Case(name, good_bag, _rig_variant(folder, name, content), "refused", fragments)
 
     bomb = ["  a: &a [1, 1, 1, 1, 1, 1, 1, 1, 1]"] + [
-        f"  {chr(98 + i)}: &{chr(98 + i)} [{', '.join([f'*{chr(97 + i)}'] * 9)}]"
-        for i in range(8)
+        f"  {chr(98 + i)}: &{chr(98 + i)} [{', '.join([f'*{chr(97 + i)}'] * 9)}]" for i in range(8)
     ]
     nested = text.replace("  washers: 1\n", "  washers: " + "[" * 50_000 + "]" * 50_000 + "\n")
     long_list = "rig:\n  name: x\n  junk: [" + "1, " * 17_000_000 + "1]\n"  # about 50 MB
@@ -83,7 +81,7 @@ def _rig_cases(folder: Path, good_bag: Path) -> list[Case]:
         ),
         refused(
             "duplicate_key_quoted",
-            text.replace("  washers: 1\n", "  washers: 1\n  \"washers\": 5\n"),
+            text.replace("  washers: 1\n", '  washers: 1\n  "washers": 5\n'),
             "duplicate key 'washers'",
         ),
         refused(
@@ -143,28 +141,69 @@ def _recording_cases(folder: Path, good_bag: Path, full: damage.Messages) -> lis
 
     # the rate: 100 Hz refused; 250 Hz worked at its own rate (answer close to 1 kHz's)
     def decimated(step: int) -> damage.Messages:
-        return damage.Messages({s: (a[::step], b[::step], c[::step]) for s, (a, b, c) in good.topics.items()})
+        return damage.Messages(
+            {s: (a[::step], b[::step], c[::step]) for s, (a, b, c) in good.topics.items()}
+        )
 
     refused("rate_100_hz", decimated(10), "100 Hz", "below the minimum")
     cases.append(
-        Case("rate_250_hz", bag("rate_250_hz", decimated(4)), rig, "answer", commands=("compare", "characterize"), check=_close_to_good)
+        Case(
+            "rate_250_hz",
+            bag("rate_250_hz", decimated(4)),
+            rig,
+            "answer",
+            commands=("compare", "characterize"),
+            check=_close_to_good,
+        )
     )
-    refused("p_b_ten_1e30", damage.set_values(good, BORE_PRESSURE, 3000, 10, 1e30), "/brake/bore/pressure", "physical bounds", "s into the topic")
-    refused("p_i_ten_1e30", damage.set_values(good, MASTER_CYLINDER_PRESSURE, 3000, 10, 1e30), "/brake/master_cylinder/pressure", "physical bounds")
-    refused("F_k_1e30_throughout", damage.set_values(good, BLOCK_FORCE, 0, 10**6, 1e30), "/brake/block/force", "physical bounds")
+    refused(
+        "p_b_ten_1e30",
+        damage.set_values(good, BORE_PRESSURE, 3000, 10, 1e30),
+        "/brake/bore/pressure",
+        "physical bounds",
+        "s into the topic",
+    )
+    refused(
+        "p_i_ten_1e30",
+        damage.set_values(good, MASTER_CYLINDER_PRESSURE, 3000, 10, 1e30),
+        "/brake/master_cylinder/pressure",
+        "physical bounds",
+    )
+    refused(
+        "F_k_1e30_throughout",
+        damage.set_values(good, BLOCK_FORCE, 0, 10**6, 1e30),
+        "/brake/block/force",
+        "physical bounds",
+    )
     hole = full
     for spec in list(full.topics):
         hole = damage.shift_stamps(hole, spec, 9000, 10_000_000_000)
     refused("hole_10_s", hole, "gap of 10", "not bridged")
     removed = full
     for spec in list(full.topics):
-        stamps = full.topics[spec][0]
         removed = damage.drop(removed, spec, 4000, 10_000)
     refused("removed_10_s", removed, "gap of 10", "not bridged")
-    refused("hole_10_s_in_p_b_only", damage.shift_stamps(full, BORE_PRESSURE, 9000, 10_000_000_000), "/brake/bore/pressure", "gap")
-    refused("removed_samples_p_i", damage.drop(good, MASTER_CYLINDER_PRESSURE, 3000, 50), "/brake/master_cylinder/pressure", "gap")
+    refused(
+        "hole_10_s_in_p_b_only",
+        damage.shift_stamps(full, BORE_PRESSURE, 9000, 10_000_000_000),
+        "/brake/bore/pressure",
+        "gap",
+    )
+    refused(
+        "removed_samples_p_i",
+        damage.drop(good, MASTER_CYLINDER_PRESSURE, 3000, 50),
+        "/brake/master_cylinder/pressure",
+        "gap",
+    )
     cases.append(
-        Case("two_removed_samples", bag("two_removed_samples", damage.drop(good, BLOCK_FORCE, 3000, 2)), rig, "answer", commands=("compare", "characterize"), check=_close_to_good)
+        Case(
+            "two_removed_samples",
+            bag("two_removed_samples", damage.drop(good, BLOCK_FORCE, 3000, 2)),
+            rig,
+            "answer",
+            commands=("compare", "characterize"),
+            check=_close_to_good,
+        )
     )
     # doors before any library: FIFOs, an unreadable folder, unsupported serialisation
     fifo = folder / "fifo.mcap"
@@ -214,20 +253,80 @@ def _output_cases(folder: Path, good_bag: Path) -> list[Case]:
     a_file = folder / "a_file"
     a_file.write_text("x")
     cases = [
-        Case("json_in_proc", good_bag, rig, "refused", ("cannot write",), commands=("compare", "characterize"), json=Path("/proc/brake_hil.json")),
-        Case("json_is_folder", good_bag, rig, "refused", ("is a folder",), commands=("compare", "characterize"), json=folder),
-        Case("json_under_a_file", good_bag, rig, "refused", ("a_file",), commands=("compare", "characterize"), json=a_file / "x.json"),
-        Case("json_link_out_of_folder", good_bag, rig, "refused", ("symbolic link",), commands=("compare", "characterize"), json=link),
-        Case("out_in_proc", good_bag, rig, "refused", ("cannot write",), commands=("diagnose",), out=Path("/proc/brake_hil")),
-        Case("out_is_a_file", good_bag, rig, "refused", ("not a folder",), commands=("diagnose",), out=a_file),
-        Case("out_with_link_out_of_folder", good_bag, rig, "refused", ("symbolic link",), commands=("diagnose",), out=diagnosis),
+        Case(
+            "json_in_proc",
+            good_bag,
+            rig,
+            "refused",
+            ("cannot write",),
+            commands=("compare", "characterize"),
+            json=Path("/proc/brake_hil.json"),
+        ),
+        Case(
+            "json_is_folder",
+            good_bag,
+            rig,
+            "refused",
+            ("is a folder",),
+            commands=("compare", "characterize"),
+            json=folder,
+        ),
+        Case(
+            "json_under_a_file",
+            good_bag,
+            rig,
+            "refused",
+            ("a_file",),
+            commands=("compare", "characterize"),
+            json=a_file / "x.json",
+        ),
+        Case(
+            "json_link_out_of_folder",
+            good_bag,
+            rig,
+            "refused",
+            ("symbolic link",),
+            commands=("compare", "characterize"),
+            json=link,
+        ),
+        Case(
+            "out_in_proc",
+            good_bag,
+            rig,
+            "refused",
+            ("cannot write",),
+            commands=("diagnose",),
+            out=Path("/proc/brake_hil"),
+        ),
+        Case(
+            "out_is_a_file",
+            good_bag,
+            rig,
+            "refused",
+            ("not a folder",),
+            commands=("diagnose",),
+            out=a_file,
+        ),
+        Case(
+            "out_with_link_out_of_folder",
+            good_bag,
+            rig,
+            "refused",
+            ("symbolic link",),
+            commands=("diagnose",),
+            out=diagnosis,
+        ),
     ]
     return cases
 
 
 def _tolerance_zero(folder: Path, good_bag: Path) -> Case:
     text = damage.GOOD_RIG.read_text(encoding="utf-8")
-    rig = _rig_variant(folder, "tolerance_zero", text + "  tolerances: {caliper.stiffness: 0, needle_valve.resistance: 0.0}\n")
+    rig = _rig_variant(
+        folder,
+        "tolerance_zero",
+        text + "  tolerances: {caliper.stiffness: 0, needle_valve.resistance: 0.0}\n",
+    )
 
     def held_fixed(_stdout: str, answer: Path) -> str | None:
         if answer.is_dir():  # diagnose: the held values are not calibrated

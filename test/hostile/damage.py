@@ -40,7 +40,9 @@ class Messages:
             path, {spec: TopicSeries(s, v, log) for spec, (s, v, log) in self.topics.items()}
         )
 
-    def replace(self, spec: TopicSpec, stamps: IntArray, values: FloatArray, log: IntArray) -> Messages:
+    def replace(
+        self, spec: TopicSpec, stamps: IntArray, values: FloatArray, log: IntArray
+    ) -> Messages:
         """A copy with one topic's messages replaced."""
         topics = dict(self.topics)
         topics[spec] = (stamps, values, log)

@@ -142,10 +142,36 @@ _NUMBER = re.compile(r"(?<=: )[-+0-9.eE]+")
 yaml_values = st.one_of(
     st.sampled_from(
         [
-            ".nan", ".inf", "-.inf", "~", "null", "true", "0", "-1", "0x1F", "1_000", "1e400",
-            "9" * 400, "'3.0'", "[1, 2]", "{a: 1}", "&a 1", "*a", "!!binary aGVsbG8=",
-            "!!python/object:os.system ls", "2001-12-14", "1.0e-300", "<<", "''", "{", "]",
-            "\"\\x00\"", "! 1", "!!float 1", "!!int 1.5", "|\n    text",
+            ".nan",
+            ".inf",
+            "-.inf",
+            "~",
+            "null",
+            "true",
+            "0",
+            "-1",
+            "0x1F",
+            "1_000",
+            "1e400",
+            "9" * 400,
+            "'3.0'",
+            "[1, 2]",
+            "{a: 1}",
+            "&a 1",
+            "*a",
+            "!!binary aGVsbG8=",
+            "!!python/object:os.system ls",
+            "2001-12-14",
+            "1.0e-300",
+            "<<",
+            "''",
+            "{",
+            "]",
+            '"\\x00"',
+            "! 1",
+            "!!float 1",
+            "!!int 1.5",
+            "|\n    text",
         ]
     ),
     st.floats(allow_nan=False, allow_infinity=False).map(repr),
@@ -181,7 +207,7 @@ def damaged_rig_text(ops: list[tuple[Any, ...]]) -> str:
         if op[0] == "value":
             line = lines[where]
             if _NUMBER.search(line):
-                lines[where] = _NUMBER.sub(lambda _m: op[2], line, count=1)
+                lines[where] = _NUMBER.sub(lambda _m, new=op[2]: new, line, count=1)
             elif ": " in line:
                 lines[where] = line.split(": ", 1)[0] + ": " + op[2]
         elif op[0] == "delete" and lines:

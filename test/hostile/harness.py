@@ -75,8 +75,10 @@ def run_cli(
     outcome = ""
     started = time.perf_counter()
     try:
-        with _alarm(2 * deadline_s), contextlib.redirect_stdout(out), contextlib.redirect_stderr(
-            err
+        with (
+            _alarm(2 * deadline_s),
+            contextlib.redirect_stdout(out),
+            contextlib.redirect_stderr(err),
         ):
             status = main(list(argv))
     except _Hang:

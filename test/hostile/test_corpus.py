@@ -30,7 +30,12 @@ def test_every_hostile_input_is_refused_in_one_line_or_answered_right(tmp_path: 
             argv = case.argv(command, tmp_path / "answers")
             answer = Path(argv[argv.index("--out" if command == "diagnose" else "--json") + 1])
 
-            def check(stdout: str, case: corpus.Case = case, answer: Path = answer) -> str | None:
+            def check(
+                stdout: str,
+                case: corpus.Case = case,
+                answer: Path = answer,
+                command: str = command,
+            ) -> str | None:
                 if command != "diagnose":
                     problem = damage.finite_metrics(damage.read_json(answer))
                     if problem is not None:
@@ -52,8 +57,16 @@ def test_every_hostile_input_is_refused_in_one_line_or_answered_right(tmp_path: 
 @pytest.mark.parametrize(
     ("name", "content", "fragment"),
     [
-        ("nan_washers.yaml", damage.GOOD_RIG.read_text().replace("washers: 1", "washers: .nan"), "finite"),
-        ("latin1.yaml", damage.GOOD_RIG.read_bytes().replace(b"name: ", b"name: \xe9", 1), "UTF-8"),
+        (
+            "nan_washers.yaml",
+            damage.GOOD_RIG.read_text().replace("washers: 1", "washers: .nan"),
+            "finite",
+        ),
+        (
+            "latin1.yaml",
+            damage.GOOD_RIG.read_bytes().replace(b"name: ", b"name: \xe9", 1),
+            "UTF-8",
+        ),
         ("nan.json", '{"format": 1, "parameters": {"k": NaN}}', "NaN"),
         ("huge.json", '{"format": 1, "parameters": {"k": 1e400}}', "beyond the range"),
     ],

@@ -17,6 +17,7 @@ from hypothesis import HealthCheck, given, settings
 from test.hostile import fuzzing
 from test.hostile.harness import FAILURES
 
+
 def _settings(examples: int) -> settings:
     return settings(
         max_examples=examples,
