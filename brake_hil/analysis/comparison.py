@@ -100,8 +100,35 @@ def predict(
     return dict(zip(OUTPUT_CHANNELS, outputs))
 
 
+FLAT_SHARE = 1e-6
+"""A channel whose peak-to-peak is at most this share of its largest magnitude does not vary
+(a constant, with the rounding of a filter): nothing can be measured from it."""
+
+
+def check_varying(recording: Recording) -> None:
+    """Refuse a recording whose ``p_i`` or a measured output does not vary at all.
+
+    Raises:
+        RecordingError: naming the recording and the channel.
+    """
+    channels = {"p_i": recording.master_cylinder_pressure, **recording.measured()}
+    for key, values in channels.items():
+        if values is None or values.size == 0:
+            continue
+        top, bottom = float(np.max(values)), float(np.min(values))
+        if not top - bottom > FLAT_SHARE * max(abs(top), abs(bottom)):
+            raise RecordingError(
+                f"{recording.path}: channel {key} does not vary (every sample between "
+                f"{bottom:.6g} and {top:.6g}): nothing to measure"
+            )
+
+
 def conditioned_channels(recording: Recording) -> dict[str, FloatArray]:
-    """The seed's 30 Hz zero-phase low-pass of ``p_i`` and every measured output."""
+    """The seed's 30 Hz zero-phase low-pass of ``p_i`` and every measured output.
+
+    Raises:
+        RecordingError: a measured output is missing, or a channel does not vary.
+    """
     measured = recording.measured()
     missing = [key for key, value in measured.items() if value is None]
     if missing:
@@ -109,6 +136,7 @@ def conditioned_channels(recording: Recording) -> dict[str, FloatArray]:
             f"{recording.path}: no measured {', '.join(missing)} to compare with "
             f"(topics present: {', '.join(recording.topics) or 'none'})"
         )
+    check_varying(recording)
     rate = recording.sample_rate
     result = {"p_i": signals.lowpass(recording.master_cylinder_pressure, rate)}
     for key, value in measured.items():

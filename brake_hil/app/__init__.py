@@ -16,6 +16,7 @@ __all__ = [
     "characterize",
     "compare",
     "diagnose",
+    "naming",
     "parallel",
     "regress",
     "simulate",

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from brake_hil.analysis.comparison import Comparison, compare
+from brake_hil.app.naming import naming
 from brake_hil.app.output import check_outputs, write_json
 from brake_hil.io.recording_reader import read_recording
 from brake_hil.physics.rig import Rig, load_rig
@@ -53,7 +54,8 @@ def run_compare(
     recording = read_recording(
         recording_path, required=(MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS)
     )
-    comparison = compare(recording, rig)
+    with naming(recording_path):
+        comparison = compare(recording, rig)
     document = {"recording": str(recording_path), "rig": str(rig_path), **comparison.as_dict()}
     if plot_path is not None:
         from brake_hil.report.plots import plot_comparison

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from brake_hil.app.naming import naming
 from brake_hil.app.output import check_outputs, write_json
 from brake_hil.diagnosis.diagnose import Diagnosis, Progress, diagnose
 from brake_hil.files import output_file
@@ -54,7 +55,8 @@ def run_diagnose(
     recording = read_recording(
         recording_path, required=(MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS)
     )
-    diagnosis = diagnose(recording, rig, progress)
+    with naming(recording_path):
+        diagnosis = diagnose(recording, rig, progress)
     json_path = output_file(out, "diagnosis.json")
     write_json(json_path, diagnosis.as_dict())
     improved = diagnosis.improved_model(rig_path).save(output_file(out, "improved_model.json"))

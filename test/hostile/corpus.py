@@ -170,6 +170,17 @@ def _recording_cases(folder: Path, good_bag: Path, full: damage.Messages) -> lis
         "physical bounds",
     )
     refused(
+        "p_b_glitch_in_bounds",
+        damage.set_values(good, BORE_PRESSURE, 3000, 5, 4.9e7),
+        "/brake/bore/pressure",
+        "faster than physically possible",
+    )
+    refused(
+        "F_k_constant_in_bounds",
+        damage.set_values(good, BLOCK_FORCE, 0, 10**6, 9e5),
+        "F_k does not vary",
+    )
+    refused(
         "F_k_1e30_throughout",
         damage.set_values(good, BLOCK_FORCE, 0, 10**6, 1e30),
         "/brake/block/force",
