@@ -72,11 +72,11 @@ def main() -> int:
         started = time.perf_counter()
         runs = _run(kind, strategy, count, args.seed)
         counts = Counter(run.outcome for run in runs)
-        slowest = max((run.seconds for run in runs), default=0.0)
+        slowest = max((run.cpu_seconds for run in runs), default=0.0)
         print(
             f"{kind:9s} {len(runs):5d} examples in {time.perf_counter() - started:6.1f} s: "
             + ", ".join(f"{o} {counts[o]}" for o in ("answer", "refused", *FAILURES))
-            + f"; slowest {slowest:.2f} s"
+            + f"; slowest {slowest:.2f} s CPU"
         )
         failed |= any(counts[o] for o in FAILURES)
     return 1 if failed else 0

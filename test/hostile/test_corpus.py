@@ -18,7 +18,7 @@ from test.hostile import corpus, damage
 from test.hostile.harness import run_cli
 
 REFUSAL_S = 5.0
-"""Longest a refusal may take (s): every door refuses before the work."""
+"""Longest a refusal may take (CPU s): every door refuses before the work."""
 
 
 def test_every_hostile_input_is_refused_in_one_line_or_answered_right(tmp_path: Path) -> None:
@@ -46,7 +46,7 @@ def test_every_hostile_input_is_refused_in_one_line_or_answered_right(tmp_path: 
             counts[run.outcome] += 1
             expected = {"either": ("answer", "refused")}.get(case.expect, (case.expect,))
             missing = [f for f in case.fragments if f not in run.stderr]
-            slow = run.outcome == "refused" and run.seconds > REFUSAL_S
+            slow = run.outcome == "refused" and run.cpu_seconds > REFUSAL_S
             if run.outcome not in expected or (run.outcome == "refused" and missing) or slow:
                 failures.append(f"{case.name}: {run.describe()}\nmissing {missing}")
     print(dict(counts))
