@@ -284,7 +284,9 @@ def read_recording(
         MissingTopicError: a required topic is absent (the message lists those present).
         RecordingError: missing path, not a recording, truncated or corrupt file, a topic of
             the wrong type, fewer than 2 samples, NaN/inf samples, stamps going backwards or
-            repeating, or a channel that does not overlap ``p_i`` in time.
+            repeating, or a channel that does not overlap ``p_i`` in time; or refused at the
+            door (:mod:`brake_hil.io.recording_checks`): not a regular file or folder, too
+            large, outside its physical bounds, too slow a sample rate, or a gap.
     """
     path = Path(path)
     unknown = [spec.name for spec in required if spec not in RECORDING_FIELDS]
