@@ -42,6 +42,7 @@ setup(
         "ros": ROS_WHEELS,
         "dev": [
             "pytest>=7",
+            "hypothesis>=6",
             "ruff>=0.5",
             "mypy>=1.8",
             "types-PyYAML",

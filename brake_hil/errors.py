@@ -12,6 +12,7 @@
      +-- ModelFileError (ValueError)        a model file is missing or of an unknown kind
      +-- ImprovedModelError (ValueError)    an improved_model.json is malformed
      +-- BaselineError (ValueError)         a regression baseline is missing or malformed
+     +-- OutputError (ValueError)           an output file or folder cannot be written
      +-- EffectError (ValueError)           an effect is unknown, doubled or out of bounds
      +-- SimulationError (RuntimeError)     the virtual rig's solver failed
      +-- FitError (ArithmeticError)         a model's simulation is not finite where a fit starts
@@ -42,6 +43,7 @@ __all__ = [
     "MissingTopicError",
     "ModelFileError",
     "NoSteadyPulsingError",
+    "OutputError",
     "RecordingError",
     "RecordingWriteError",
     "RigError",
@@ -89,6 +91,10 @@ class ImprovedModelError(BrakeHilError, ValueError):
 
 class BaselineError(BrakeHilError, ValueError):
     """A baseline file is missing, unreadable or malformed."""
+
+
+class OutputError(BrakeHilError, ValueError):
+    """An output file or folder cannot be written, or is a link leading out of its folder."""
 
 
 class EffectError(BrakeHilError, ValueError):

@@ -13,7 +13,7 @@ import pytest
 PACKAGE = Path(__file__).resolve().parents[1] / "brake_hil"
 
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("brake_hil", "brake_hil.types", "brake_hil.errors", "brake_hil.topics"),
+    ("brake_hil", "brake_hil.types", "brake_hil.errors", "brake_hil.topics", "brake_hil.files"),
     ("brake_hil.physics",),
     ("brake_hil.analysis",),
     ("brake_hil.diagnosis",),

@@ -35,9 +35,9 @@ import math
 import numpy as np
 
 from brake_hil.analysis import signals
-from brake_hil.analysis.comparison import steady_windows
+from brake_hil.analysis.comparison import check_varying, steady_windows
 from brake_hil.analysis.recording import Recording
-from brake_hil.errors import RecordingError
+from brake_hil.errors import RecordingError, SignalError
 from brake_hil.physics.parameters import (
     excitation_angular_frequency,
     piston_area,
@@ -102,6 +102,7 @@ def characterize(recording: Recording, rig: Rig) -> list[SegmentCharacterization
         raise RecordingError(
             f"{recording.path}: characterisation needs measured {', '.join(missing)}"
         )
+    check_varying(recording)
     rate = recording.sample_rate
     input_filtered = signals.lowpass(recording.master_cylinder_pressure, rate)
     segments = steady_windows(recording, input_filtered, rig)
@@ -139,10 +140,19 @@ def _characterize_segment(
     seal_force = (  # eq. 21e: F_s = A_ep p_b - F_k - M_p x_p''
         area_ep * bore_phasor - force_phasor + rig.piston_mass * omega**2 * piston_phasor
     )
+    if seal_displacement == 0 or caliper_phasor == 0:
+        raise SignalError(
+            f"segment {start:.2f}-{end:.2f} s: no seal or caliper motion at "
+            f"{rig.excitation_hz:g} Hz to characterise"
+        )
     seal_impedance = seal_force / seal_displacement  # k_eh + j w_e c_eh
     amplitude = abs(seal_displacement)
     k_eh = seal_impedance.real
     c_eh = seal_impedance.imag / omega
+    if k_eh == 0 or c_eh == 0:
+        raise SignalError(
+            f"segment {start:.2f}-{end:.2f} s: the seal's stiffness or damping is exactly 0"
+        )
     c_eh_eq1 = abs((force_phasor * caliper_phasor.conjugate()).imag) / (
         omega * abs(caliper_phasor) ** 2
     )

@@ -16,7 +16,7 @@ import numpy as np
 from brake_hil.analysis import signals
 from brake_hil.analysis.recording import Recording
 from brake_hil.errors import RecordingError, SignalError
-from brake_hil.physics.lti_model import caliper_state_space, discretize, simulate
+from brake_hil.physics.lti_model import SAMPLE_TIME, caliper_state_space, discretize, simulate
 from brake_hil.physics.parameters import ModelParameters, derive_parameters
 from brake_hil.physics.rig import Rig
 from brake_hil.topics import OUTPUT_CHANNELS
@@ -86,14 +86,49 @@ def steady_windows(
         raise SignalError(f"{recording.path}: {err}") from err
 
 
-def predict(pressure: FloatArray, params: ModelParameters) -> dict[str, FloatArray]:
-    """LTI-model outputs keyed ``p_b``, ``F_k``, ``x_c`` for a 1 kHz input ``pressure`` (Pa)."""
-    outputs = simulate(discretize(caliper_state_space(params)), pressure)
+def predict(
+    pressure: FloatArray, params: ModelParameters, sample_time: float = SAMPLE_TIME
+) -> dict[str, FloatArray]:
+    """LTI-model outputs keyed ``p_b``, ``F_k``, ``x_c`` for an input ``pressure`` (Pa).
+
+    Args:
+        pressure: the master-cylinder pressure (Pa), one sample per ``sample_time``.
+        params: the model's coefficients.
+        sample_time: the input's sample period (s): the model is discretised at it.
+    """
+    outputs = simulate(discretize(caliper_state_space(params), sample_time), pressure)
     return dict(zip(OUTPUT_CHANNELS, outputs))
 
 
+FLAT_SHARE = 1e-6
+"""A channel whose peak-to-peak is at most this share of its largest magnitude does not vary
+(a constant, with the rounding of a filter): nothing can be measured from it."""
+
+
+def check_varying(recording: Recording) -> None:
+    """Refuse a recording whose ``p_i`` or a measured output does not vary at all.
+
+    Raises:
+        RecordingError: naming the recording and the channel.
+    """
+    channels = {"p_i": recording.master_cylinder_pressure, **recording.measured()}
+    for key, values in channels.items():
+        if values is None or values.size == 0:
+            continue
+        top, bottom = float(np.max(values)), float(np.min(values))
+        if not top - bottom > FLAT_SHARE * max(abs(top), abs(bottom)):
+            raise RecordingError(
+                f"{recording.path}: channel {key} does not vary (every sample between "
+                f"{bottom:.6g} and {top:.6g}): nothing to measure"
+            )
+
+
 def conditioned_channels(recording: Recording) -> dict[str, FloatArray]:
-    """The seed's 30 Hz zero-phase low-pass of ``p_i`` and every measured output."""
+    """The seed's 30 Hz zero-phase low-pass of ``p_i`` and every measured output.
+
+    Raises:
+        RecordingError: a measured output is missing, or a channel does not vary.
+    """
     measured = recording.measured()
     missing = [key for key, value in measured.items() if value is None]
     if missing:
@@ -101,6 +136,7 @@ def conditioned_channels(recording: Recording) -> dict[str, FloatArray]:
             f"{recording.path}: no measured {', '.join(missing)} to compare with "
             f"(topics present: {', '.join(recording.topics) or 'none'})"
         )
+    check_varying(recording)
     rate = recording.sample_rate
     result = {"p_i": signals.lowpass(recording.master_cylinder_pressure, rate)}
     for key, value in measured.items():
@@ -120,12 +156,13 @@ def compare(recording: Recording, rig: Rig, params: ModelParameters | None = Non
     period = 1.0 / rig.excitation_hz
     windows = steady_windows(recording, filtered["p_i"], rig)
     predicted = {key: np.full(time.size, np.nan) for key in OUTPUT_CHANNELS}
-    fixed = None if params is None else predict(filtered["p_i"], params)  # one run serves all
+    step = 1.0 / recording.sample_rate  # the recording's own rate, from its stamps
+    fixed = None if params is None else predict(filtered["p_i"], params, step)  # serves all
     segments = []
     for start, end in windows:
         part = signals.segment_slice(time, start, end)
         mean_pressure = float(np.mean(filtered["p_i"][part]))
-        outputs = fixed or predict(filtered["p_i"], derive_parameters(rig, mean_pressure))
+        outputs = fixed or predict(filtered["p_i"], derive_parameters(rig, mean_pressure), step)
         metrics = {}
         for key in OUTPUT_CHANNELS:
             predicted[key][part] = outputs[key][part]

@@ -17,6 +17,7 @@ __all__ = [
     "characterize",
     "compare",
     "diagnose",
+    "naming",
     "parallel",
     "recover",
     "regress",

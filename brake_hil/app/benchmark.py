@@ -27,6 +27,7 @@ from pathlib import Path
 import statistics
 import time
 
+from brake_hil.app.output import check_outputs, write_json
 from brake_hil.app.parallel import Outcome, parallel_map, values
 from brake_hil.diagnosis.diagnose import diagnose
 from brake_hil.errors import BrakeHilError
@@ -223,6 +224,7 @@ def run_benchmark(
     Raises:
         BrakeHilError: no cases, no labels, or labels that cannot be read.
     """
+    check_outputs(json_path)
     cases = sorted(p for p in (directory / "cases").glob("*") if p.is_dir())
     if not cases:
         raise BrakeHilError(f"{directory}: no cases under {directory / 'cases'}")
@@ -231,7 +233,5 @@ def run_benchmark(
         raise BrakeHilError(f"{labels_path}: no labels to score against")
     results = run_cases(cases, jobs, progress)
     figures = score(results, read_labels(labels_path))
-    if json_path is not None:
-        json_path.parent.mkdir(parents=True, exist_ok=True)
-        json_path.write_text(json.dumps(figures, indent=2) + "\n", encoding="utf-8")
+    write_json(json_path, figures)
     return Benchmark(tuple(results), figures, json_path)

@@ -6,7 +6,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from brake_hil.analysis.characterization import SegmentCharacterization, characterize
-from brake_hil.app.output import write_json
+from brake_hil.app.naming import naming
+from brake_hil.app.output import check_outputs, write_json
 from brake_hil.io.recording_reader import read_recording
 from brake_hil.physics.rig import Rig, load_rig
 from brake_hil.topics import MASTER_CYLINDER_PRESSURE, MEASURED_OUTPUTS
@@ -42,11 +43,13 @@ def run_characterize(
     Raises:
         BrakeHilError: a bad rig file or recording, or no steady pulsing.
     """
+    check_outputs(json_path)
     rig = load_rig(rig_path)
     recording = read_recording(
         recording_path, required=(MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS)
     )
-    segments = tuple(characterize(recording, rig))
+    with naming(recording_path):
+        segments = tuple(characterize(recording, rig))
     document: dict[str, object] = {
         "recording": str(recording_path),
         "segments": [s.as_dict() for s in segments],

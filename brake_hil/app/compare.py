@@ -6,7 +6,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from brake_hil.analysis.comparison import Comparison, compare
-from brake_hil.app.output import write_json
+from brake_hil.app.naming import naming
+from brake_hil.app.output import check_outputs, write_json
 from brake_hil.io.recording_reader import read_recording
 from brake_hil.physics.rig import Rig, load_rig
 from brake_hil.topics import MASTER_CYLINDER_PRESSURE, MEASURED_OUTPUTS
@@ -48,11 +49,13 @@ def run_compare(
         BrakeHilError: a bad rig file or recording, or no steady pulsing (the message names
             the file).
     """
+    check_outputs(json_path, plot_path)
     rig = load_rig(rig_path)
     recording = read_recording(
         recording_path, required=(MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS)
     )
-    comparison = compare(recording, rig)
+    with naming(recording_path):
+        comparison = compare(recording, rig)
     document = {"recording": str(recording_path), "rig": str(rig_path), **comparison.as_dict()}
     if plot_path is not None:
         from brake_hil.report.plots import plot_comparison

@@ -5,18 +5,22 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from brake_hil.app.output import write_json
+from brake_hil.app.naming import naming
+from brake_hil.app.output import check_outputs, write_json
 from brake_hil.diagnosis.candidates import CANDIDATES
 from brake_hil.diagnosis.diagnose import PAIR_SHORTLIST, Diagnosis, Progress, diagnose
+from brake_hil.files import output_file
 from brake_hil.io.recording_reader import read_recording
 from brake_hil.physics.rig import load_rig
 from brake_hil.topics import MASTER_CYLINDER_PRESSURE, MEASURED_OUTPUTS
 
-__all__ = ["DIAGNOSIS_STEPS", "DiagnoseResult", "run_diagnose"]
+__all__ = ["DIAGNOSE_FILES", "DIAGNOSIS_STEPS", "DiagnoseResult", "run_diagnose"]
 
 DIAGNOSIS_STEPS = 4 + len(CANDIDATES) + PAIR_SHORTLIST + 1
 """The most steps :func:`run_diagnose` reports: preparing, calibrating, locating, each single
 candidate, each pair of the shortlist, scoring, the report (fewer when no pair is fitted)."""
+DIAGNOSE_FILES = ("diagnosis.json", "improved_model.json")
+"""The files :func:`run_diagnose` writes besides the report's."""
 
 
 @dataclass(frozen=True)
@@ -46,17 +50,18 @@ def run_diagnose(
     Raises:
         BrakeHilError: a bad rig file or recording (the message names the file).
     """
-    from brake_hil.report.diagnosis_report import write_report
+    from brake_hil.report.diagnosis_report import REPORT_FILES, write_report
 
+    check_outputs(folder=out, names=(*DIAGNOSE_FILES, *REPORT_FILES))
     rig = load_rig(rig_path)
     recording = read_recording(
         recording_path, required=(MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS)
     )
-    diagnosis = diagnose(recording, rig, progress)
-    out.mkdir(parents=True, exist_ok=True)
-    json_path = out / "diagnosis.json"
+    with naming(recording_path):
+        diagnosis = diagnose(recording, rig, progress)
+    json_path = output_file(out, "diagnosis.json")
     write_json(json_path, diagnosis.as_dict())
-    improved = diagnosis.improved_model(rig_path).save(out / "improved_model.json")
+    improved = diagnosis.improved_model(rig_path).save(output_file(out, "improved_model.json"))
     if progress is not None:
         progress("writing the report")
     page = write_report(diagnosis, out, rig_path)

@@ -48,6 +48,7 @@ from brake_hil.app.parallel import Outcome, parallel_map, values
 from brake_hil.errors import BaselineError, NoSteadyPulsingError, RecordingError, SignalError
 from brake_hil.io.recording_reader import read_recording
 from brake_hil.live.model_file import load_model
+from brake_hil.physics.lti_model import SAMPLE_TIME
 from brake_hil.topics import OUTPUT_CHANNELS
 
 # --------------------------------------------------------------------------- replay
@@ -106,6 +107,12 @@ def replay_recording(
     missing = [key for key, value in measured.items() if value is None]
     if missing:
         raise RecordingError(f"{recording.path}: no measured {', '.join(missing)} to compare with")
+    live_rate = 1.0 / SAMPLE_TIME
+    if abs(recording.sample_rate / live_rate - 1.0) > 0.01:
+        raise RecordingError(
+            f"{recording.path}: sampled at {recording.sample_rate:.4g} Hz; the live model "
+            f"steps at {live_rate:g} Hz, so its replay would run at the wrong time scale"
+        )
     pressure = recording.master_cylinder_pressure
     mean = float(np.mean(pressure)) if mean_pressure is None else mean_pressure
     model = load_model(model_file, mean)

@@ -62,10 +62,16 @@ RIG_VALUES = ("valve_resistance", "air_fraction", "hose_stiffness")
 
 
 def uncertain_values(rig: Rig) -> tuple[Uncertain, ...]:
-    """The calibrated values of a rig file."""
+    """The calibrated values of a rig file.
+
+    A value whose tolerance the rig file sets to 0 is held fixed at its nominal value
+    (interface.md: tolerance 0 means known exactly): it is left out of the calibration and
+    of every candidate's fit.
+    """
+    values: tuple[Uncertain, ...] = UNCERTAIN
     if "C_b" in rig.model_overrides:
-        return tuple(BORE_COMPLIANCE if u.name == "air_fraction" else u for u in UNCERTAIN)
-    return UNCERTAIN
+        values = tuple(BORE_COMPLIANCE if u.name == "air_fraction" else u for u in UNCERTAIN)
+    return tuple(u for u in values if rig.tolerance(u.tolerance_key) > 0.0)
 
 
 @dataclass(frozen=True)
@@ -133,6 +139,8 @@ def calibrate(dataset: Dataset, rig: Rig) -> Calibration:
         u.name: max(rig.tolerance(u.tolerance_key), u.minimum_sigma) for u in uncertain_values(rig)
     }
     names = list(sigmas)
+    if not names:  # every uncertain value held fixed (tolerance 0): the nominal model
+        return Calibration(rig=rig, multipliers={}, sigmas={}, uncertainty={}, cost=0.0)
     sigma = np.array([sigmas[n] for n in names])
     samples = int(dataset.mask(dataset.train).sum()) * len(OUTPUT_CHANNELS)
 

@@ -21,6 +21,7 @@ from brake_hil.diagnosis.candidates import CANDIDATES, candidate
 from brake_hil.diagnosis.candidates.base import Draft, rig_context
 from brake_hil.diagnosis.engine import ModelSpec
 from brake_hil.errors import ImprovedModelError
+from brake_hil.files import load_json
 from brake_hil.physics.rig import Rig
 
 FORMAT = "brake_hil/improved_model/1"
@@ -72,12 +73,7 @@ class ImprovedModel:
 
 def read_improved_model(path: Path) -> ImprovedModel:
     """Read ``improved_model.json``; refuse a malformed one naming the file and the key."""
-    try:
-        document = json.loads(path.read_text(encoding="utf-8"))
-    except OSError as err:
-        raise ImprovedModelError(f"{path}: cannot read: {err.strerror or err}") from err
-    except json.JSONDecodeError as err:
-        raise ImprovedModelError(f"{path}: not valid JSON: {err.msg}") from err
+    document = load_json(path, "improved model", ImprovedModelError)
     if not isinstance(document, dict) or document.get("format") != FORMAT:
         raise ImprovedModelError(f"{path}: not an improved model (format {FORMAT} expected)")
     try:

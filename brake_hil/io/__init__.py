@@ -5,6 +5,7 @@ from __future__ import annotations
 __all__ = [
     "can_daq",
     "mcap_recorder",
+    "recording_checks",
     "recording_reader",
     "recording_writer",
     "stamped_cdr",

@@ -32,6 +32,7 @@ from rosbags.rosbag2 import Reader
 
 from brake_hil.analysis.recording import Recording
 from brake_hil.errors import MissingTopicError, RecordingError
+from brake_hil.io.recording_checks import check_channel, check_recording_path, unsupported_format
 from brake_hil.io.stamped_cdr import decode_stamped
 from brake_hil.io.unfinished import open_unfinished
 from brake_hil.topics import (
@@ -92,6 +93,7 @@ def _one_line(err: BaseException) -> str:
 
 def _check_path(path: Path) -> None:
     """Refuse a path that cannot hold a recording, before any library sees it."""
+    check_recording_path(path)
     if not path.exists():
         missing = FileNotFoundError(errno.ENOENT, os.strerror(errno.ENOENT), str(path))
         raise _fail(path, "no such file or directory") from missing
@@ -125,6 +127,8 @@ def _open(path: Path) -> Reader:
 def _unreadable(path: Path, err: Exception) -> RecordingError:
     if isinstance(err, OSError):
         return _fail(path, f"cannot read the recording: {_one_line(err)}")
+    if (problem := unsupported_format(path)) is not None:
+        return _fail(path, problem)
     return _fail(path, f"unreadable recording (truncated or corrupt?): {_one_line(err)}")
 
 
@@ -233,6 +237,7 @@ def _decode(path: Path, spec: TopicSpec, messages: Sequence[bytes]) -> _Channel:
             f"{stamps[i]} ns ({_count(repeat.size, 'time')} in all)"
         )
         raise _fail(path, problem)
+    check_channel(path, spec, stamps, values)
     return _Channel(stamps, values)
 
 
@@ -288,7 +293,9 @@ def read_recording(
         MissingTopicError: a required topic is absent (the message lists those present).
         RecordingError: missing path, not a recording, truncated or corrupt file, a topic of
             the wrong type, fewer than 2 samples, NaN/inf samples, stamps going backwards or
-            repeating, or a channel that does not overlap ``p_i`` in time.
+            repeating, or a channel that does not overlap ``p_i`` in time; or refused at the
+            door (:mod:`brake_hil.io.recording_checks`): not a regular file or folder, too
+            large, outside its physical bounds, too slow a sample rate, or a gap.
     """
     path = Path(path)
     unknown = [spec.name for spec in required if spec not in RECORDING_FIELDS]

@@ -22,6 +22,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from brake_hil.errors import ModelFileError
+from brake_hil.files import RIG_FILE_MAX_BYTES, check_input_file
 from brake_hil.live.improved import load_improved_model
 from brake_hil.live.model import LiveModel, ModelLoader
 from brake_hil.physics.lti_model import (
@@ -85,12 +86,15 @@ def load_model(path: Path | str, mean_pressure: float = DEFAULT_MEAN_PRESSURE) -
     """The model in ``path``, derived at ``mean_pressure`` (Pa) where it depends on it.
 
     Raises:
-        ModelFileError: no such file, or a suffix no loader reads.
-        RigError: a rig file with a bad key or value (names the file and key).
+        ModelFileError: no such file, not a regular file, larger than
+            :data:`~brake_hil.files.RIG_FILE_MAX_BYTES`, or a suffix no loader reads.
+        RigError: a rig file that is not UTF-8, not strict YAML, or has a bad key or value
+            (names the file and key).
+        ImprovedModelError: an improved model that is not strict JSON (no NaN) or is
+            malformed.
     """
     path = Path(path)
-    if not path.is_file():
-        raise ModelFileError(f"{path}: no such model file")
+    check_input_file(path, "model file", RIG_FILE_MAX_BYTES, ModelFileError)
     if not mean_pressure > 0.0:
         raise ModelFileError(f"{path}: mean pressure must be positive, got {mean_pressure} Pa")
     loader = _LOADERS.get(path.suffix.lower())

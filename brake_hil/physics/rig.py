@@ -12,12 +12,10 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-import re
 from typing import Any, NamedTuple
 
-import yaml
-
 from brake_hil.errors import RigError
+from brake_hil.files import finite, load_yaml, read_text
 
 
 class Bound(NamedTuple):
@@ -196,30 +194,16 @@ class Rig:
         return DEFAULT_TOLERANCES.get(dotted_key, DEFAULT_TOLERANCE)
 
 
-class _RigLoader(yaml.SafeLoader):
-    """SafeLoader that reads ``4.0e7`` as a float, as YAML 1.2 does (PyYAML reads a str)."""
-
-
-_RigLoader.add_implicit_resolver(
-    "tag:yaml.org,2002:float",
-    re.compile(r"^[-+]?(?:\d+\.?\d*|\.\d+)[eE][-+]?\d+$"),
-    list("-+0123456789."),
-)
-
-
 def load_rig(path: Path | str) -> Rig:
-    """Load and validate a rig YAML file; raise RigError naming the file and key."""
+    """Load and validate a rig YAML file; raise RigError naming the file and key.
+
+    The file goes through the input door (:mod:`brake_hil.files`) first: a regular file of
+    at most :data:`~brake_hil.files.RIG_FILE_MAX_BYTES`, UTF-8 text, strict YAML (no
+    anchors, aliases, merge keys or duplicate keys; limited nesting and scalar length).
+    """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as err:
-        raise RigError(f"{path}: cannot read rig file: {err.strerror or err}") from err
-    try:
-        document = yaml.load(text, Loader=_RigLoader)  # noqa: S506 (a SafeLoader)
-    except yaml.YAMLError as err:
-        problem = str(err).splitlines()[0] if str(err) else "invalid YAML"
-        raise RigError(f"{path}: not valid YAML: {problem}") from err
-    return rig_from_mapping(document, source=str(path))
+    text = read_text(path, "rig file", RigError)
+    return rig_from_mapping(load_yaml(text, path, RigError), source=str(path))
 
 
 def rig_from_mapping(document: object, source: str = "<memory>") -> Rig:
@@ -313,17 +297,28 @@ def _check_mapping(
 def _check_number(value: object, bound: Bound, source: str, dotted: str) -> float | int:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise RigError(
-            f"{source}: rig key '{dotted}' must be a number in {bound.unit}, got {value!r}"
+            f"{source}: rig key '{dotted}' must be a number in {bound.unit}, got {_shown(value)}"
+        )
+    if not finite(value):
+        raise RigError(
+            f"{source}: rig key '{dotted}' must be a finite number in {bound.unit}, "
+            f"got {_shown(value)}"
         )
     if bound.integer and float(value) != int(value):
-        raise RigError(f"{source}: rig key '{dotted}' must be a whole number, got {value!r}")
+        raise RigError(f"{source}: rig key '{dotted}' must be a whole number, got {_shown(value)}")
     number = float(value)
     if not bound.low <= number <= bound.high:
         raise RigError(
-            f"{source}: rig key '{dotted}' = {value!r} {bound.unit} is implausible "
+            f"{source}: rig key '{dotted}' = {_shown(value)} {bound.unit} is implausible "
             f"(expected {bound.low:g} to {bound.high:g} {bound.unit})"
         )
     return int(number) if bound.integer else number
+
+
+def _shown(value: object) -> str:
+    """``value`` for a one-line message: its repr, shortened to 40 characters."""
+    text = " ".join(repr(value).split())
+    return text if len(text) <= 40 else text[:37] + "..."
 
 
 def _known_dotted_keys() -> set[str]:

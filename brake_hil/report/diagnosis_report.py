@@ -35,12 +35,14 @@ from brake_hil.diagnosis.diagnose import (  # noqa: E402
 )
 from brake_hil.diagnosis.evidence import PHASE_BINS  # noqa: E402
 from brake_hil.diagnosis.fitting import Fit, Model  # noqa: E402
+from brake_hil.files import output_file  # noqa: E402
 from brake_hil.physics.catalogue import CATALOGUE  # noqa: E402
 from brake_hil.topics import OUTPUT_CHANNELS  # noqa: E402
 
 __all__ = [
     "FLAG_SIGMA",
     "NRMSE_DEFINITION",
+    "REPORT_FILES",
     "RIG_CHECKS",
     "calibration_findings",
     "findings",
@@ -48,6 +50,15 @@ __all__ = [
     "improved_multipliers",
     "write_report",
 ]
+
+REPORT_FILES = (
+    "report.html",
+    "held_out.png",
+    "residual_phase.png",
+    "harmonics.png",
+    "hysteresis.png",
+)
+"""The files :func:`write_report` writes into its folder."""
 
 UNITS = {"p_b": ("MPa", 1e-6), "F_k": ("kN", 1e-3), "x_c": ("um", 1e6)}
 COLOURS = {"measured": "black", "baseline": "tab:blue", "improved": "tab:red"}
@@ -97,12 +108,12 @@ def write_report(diagnosis: Diagnosis, out: Path, rig_path: Path | None = None) 
     """
     out.mkdir(parents=True, exist_ok=True)
     figures = [
-        _time_plot(diagnosis, out / "held_out.png"),
-        _phase_plot(diagnosis, out / "residual_phase.png"),
-        _harmonics_plot(diagnosis, out / "harmonics.png"),
-        _loop_plot(diagnosis, out / "hysteresis.png"),
+        _time_plot(diagnosis, output_file(out, "held_out.png")),
+        _phase_plot(diagnosis, output_file(out, "residual_phase.png")),
+        _harmonics_plot(diagnosis, output_file(out, "harmonics.png")),
+        _loop_plot(diagnosis, output_file(out, "hysteresis.png")),
     ]
-    page = out / "report.html"
+    page = output_file(out, "report.html")
     page.write_text(_html(diagnosis, [f.name for f in figures], rig_path), encoding="utf-8")
     return page
 

@@ -27,12 +27,15 @@ from brake_hil.topics import MASTER_CYLINDER_PRESSURE, MEASURED_OUTPUTS, TopicSp
 
 T0 = 1_700_000_000_000_000_000
 TOPICS = (MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS)
+STEP = {spec.name: 1e-9 if spec.quantity == "x_c" else 1.0 for spec in TOPICS}
+"""Value of sample k is k * STEP: 1 nm a sample keeps x_c within its physical bounds."""
 
 
 def messages(spec: TopicSpec, count: int) -> list[bytes]:
-    """``count`` CDR messages of a contract topic: value k, stamp T0 + k ms."""
+    """``count`` CDR messages of a contract topic: value k * STEP, stamp T0 + k ms."""
     stamps = T0 + np.arange(count, dtype=np.int64) * 1_000_000
-    rows = encode_stamped(spec.msgtype, spec.field, stamps, np.arange(count, dtype=float), "rig")
+    values = np.arange(count, dtype=float) * STEP[spec.name]
+    rows = encode_stamped(spec.msgtype, spec.field, stamps, values, "rig")
     return [row.tobytes() for row in rows]
 
 
@@ -90,7 +93,7 @@ def test_messages_round_trip_byte_for_byte(tmp_path: Path) -> None:
     assert [v for _, v in decoded[MASTER_CYLINDER_PRESSURE.name]] == list(range(500))
     recording = read_recording(path, required=TOPICS)
     assert recording.start_stamp_ns == T0
-    np.testing.assert_array_equal(recording.caliper_displacement, np.arange(500.0))
+    np.testing.assert_array_equal(recording.caliper_displacement, np.arange(500.0) * 1e-9)
 
 
 def test_metadata_lists_qos_hash_and_schema_as_rosbag2_does(tmp_path: Path) -> None:
@@ -131,7 +134,7 @@ def test_files_split_and_every_file_is_listed(tmp_path: Path, limits: dict[str, 
         assert all(f["duration"]["nanoseconds"] < 0.5e9 for f in info["files"])
     decoded = read_mcap_files(path)
     for spec in TOPICS:
-        assert [v for _, v in decoded[spec.name]] == list(range(2000))
+        assert [v for _, v in decoded[spec.name]] == [k * STEP[spec.name] for k in range(2000)]
     recording = read_recording(path, required=TOPICS)
     assert recording.time.size == 2000
 
@@ -154,7 +157,8 @@ def test_a_killed_recording_keeps_every_committed_chunk(tmp_path: Path) -> None:
     decoded = read_mcap_files(killed)
     for spec in TOPICS:
         values = [v for _, v in decoded[spec.name]]
-        assert values == list(range(len(values)))  # a gap-free prefix
+        step = STEP[spec.name]
+        assert values == [k * step for k in range(len(values))]  # a gap-free prefix
     recording = read_recording(killed, required=TOPICS)
     assert recording.time.size >= 3000 - pending // len(TOPICS) - 1
 

@@ -168,8 +168,8 @@ def test_mcap_from_another_writer_with_other_frame_ids_and_skewed_stamps_reads(
     n, start = 2000, 1_650_000_000_000_000_000
     p_i_stamps = start + np.arange(n, dtype=np.int64) * 1_000_000
     p_b_stamps = p_i_stamps + 400_000
-    p_i = np.sin(np.arange(n) / 50.0) * 1e6
-    p_b = np.cos(np.arange(n) / 50.0) * 1e6
+    p_i = (1.0 + np.sin(np.arange(n) / 50.0)) * 1e6  # gauge pressures: within physical bounds
+    p_b = (1.0 + np.cos(np.arange(n) / 50.0)) * 1e6
     path = tmp_path / "simulator.mcap"
     with path.open("wb") as stream:
         writer = McapRos2Writer(stream)

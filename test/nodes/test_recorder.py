@@ -36,6 +36,8 @@ from brake_hil.topics import AIR_PRESSURE, MASTER_CYLINDER_PRESSURE, MEASURED_OU
 SAMPLE_TOPICS = (MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS, AIR_PRESSURE)
 T0 = 1_700_000_000_000_000_000
 PERIOD_NS = 1_000_000
+STEP = {"x_c": 1e-9}
+"""Sample k carries the value k * STEP (default 1): 1 nm a sample keeps x_c physical."""
 
 
 def domain_id() -> int:
@@ -86,6 +88,7 @@ class Publisher:
         self.unrelated = self.node.create_publisher(
             common.message_class(AIR_PRESSURE), "/not_brake/pressure", common.SAMPLE_QOS
         )
+        self.steps = [STEP.get(spec.quantity, 1.0) for spec in SAMPLE_TOPICS]
         self.published = 0
         self.stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -108,8 +111,8 @@ class Publisher:
             if delay > 0:
                 time.sleep(delay / 1e9)
             stamp = T0 + k * PERIOD_NS
-            for publisher, build in self.outputs:
-                publisher.publish(build(stamp, float(k)))
+            for (publisher, build), step in zip(self.outputs, self.steps):
+                publisher.publish(build(stamp, float(k) * step))
             array.header.stamp.sec, array.header.stamp.nanosec = divmod(stamp, 1_000_000_000)
             array.status[0].message = str(k)
             self.diagnostics.publish(array)
@@ -156,7 +159,9 @@ def values_by_topic(bag: Path) -> dict[str, list[float]]:
                     value = float(decoded.status[0].message)
                 else:
                     spec = next(s for s in SAMPLE_TOPICS if s.name == channel.topic)
+                    step = STEP.get(spec.quantity, 1.0)
                     value = common.value_reader(spec)(decoded)
+                    value = value if step == 1.0 else float(round(value / step))
                     stamp = common.stamp_ns(decoded)
                     assert stamp == T0 + round(value) * PERIOD_NS  # header.stamp kept as sent
                     # the log time is the receive time (wall clock of the test), not the stamp
