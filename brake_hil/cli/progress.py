@@ -4,6 +4,9 @@ In a terminal the bar redraws in place (every second at least, so the elapsed ti
 while one step takes long). When stderr is not a terminal (CI, ``| tee``, a log file) every
 redraw is its own line, at most one per :data:`LINE_INTERVAL_S` seconds and at least one
 every :data:`LINE_INTERVAL_S` seconds while the work runs, so a log shows that it is alive.
+Nothing is drawn before :data:`QUIET_START_S` (terminal) or :data:`LINE_INTERVAL_S` (not)
+seconds: a command refused at its door prints its one error line and nothing else; work that
+ends sooner than that prints its final state once.
 """
 
 from __future__ import annotations
@@ -16,10 +19,12 @@ from typing import IO
 
 from tqdm import tqdm
 
-__all__ = ["LINE_INTERVAL_S", "progress_bar"]
+__all__ = ["LINE_INTERVAL_S", "QUIET_START_S", "progress_bar"]
 
 LINE_INTERVAL_S = 5.0
 """Seconds between progress lines when stderr is not a terminal."""
+QUIET_START_S = 0.5
+"""Seconds a terminal's bar waits before its first draw."""
 
 
 class _Lines:
@@ -62,6 +67,7 @@ def progress_bar(
         ascii=None if terminal else True,
         dynamic_ncols=terminal,
         ncols=None if terminal else 100,
+        delay=QUIET_START_S if terminal else LINE_INTERVAL_S,
         **options,  # type: ignore[arg-type]
     )
     stop = threading.Event()
@@ -72,9 +78,15 @@ def progress_bar(
 
     timer = threading.Thread(target=tick, name="progress", daemon=True)
     timer.start()
+    finished = False
     try:
         yield bar
+        finished = True
     finally:
         stop.set()
         timer.join()
+        if finished and bar.last_print_t < bar.start_t + bar.delay:
+            bar.refresh()  # quick work: its final state, once
+            if terminal:
+                target.write("\n")
         bar.close()
