@@ -117,7 +117,7 @@ class CaliperModelNode(common.LoopNode):
         )
         # Faults seen (count, monotonic ns of the last change): reported at once, ERROR for
         # FAULT_ERROR_S after the last one, WARN for the rest of the run.
-        self._faults = {name: (0, 0) for name in FAULT_COUNTERS}
+        self._faults = dict.fromkeys(FAULT_COUNTERS, (0, 0))
         self._phase_lock = PhaseLock(period_ns) if settings.phase_lock else None
         self._builders = [
             common.RawMessageBuilder(spec, settings.frame_id) for spec in PREDICTED_OUTPUTS

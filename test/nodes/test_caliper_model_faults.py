@@ -172,7 +172,7 @@ def test_published_predictions_are_the_model_stepped_from_its_last_good_state(
     # The sample after the NaN and the inf is stepped from the state before them: a plain
     # stepper fed the good samples only gives the same prediction.
     plain = load_model(RIG, MEAN_PRESSURE).stepper()
-    for stamp, value in faulty_run["samples"][: INF_AT + 2]:
+    for _, value in faulty_run["samples"][: INF_AT + 2]:
         if math.isfinite(value):
             outputs = plain.step(value)
     after = faulty_run["samples"][INF_AT + 1][0]
