@@ -7,7 +7,7 @@ the same QoS as the project's nodes, waiting until the node under test has subsc
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 import time
 
 import rclpy
@@ -21,35 +21,45 @@ MS = 1_000_000
 
 
 class SamplePublisher:
-    """Publishes ``(stamp_ns, value)`` samples of one contract topic, paced."""
+    """Publishes ``(stamp_ns, value)`` samples of one contract topic (or more), paced."""
 
-    def __init__(self, spec: TopicSpec) -> None:
+    def __init__(self, spec: TopicSpec, *more: TopicSpec) -> None:
         self._context = Context()
         rclpy.init(context=self._context)
         self.node = Node("test_fault_source", context=self._context)
-        self._build = common.RawMessageBuilder(spec, "test")
-        self.publisher = self.node.create_publisher(
-            common.message_class(spec), spec.name, common.SAMPLE_QOS
-        )
+        specs = (spec, *more)
+        self._builds = [common.RawMessageBuilder(s, "test") for s in specs]
+        self.publishers = [
+            self.node.create_publisher(common.message_class(s), s.name, common.SAMPLE_QOS)
+            for s in specs
+        ]
+        self.publisher = self.publishers[0]
 
     def wait_for_subscribers(self, count: int, timeout_s: float = 30.0) -> bool:
-        """True once ``count`` subscriptions have matched this publisher."""
+        """True once ``count`` subscriptions have matched every publisher."""
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline:
-            if self.publisher.get_subscription_count() >= count:
+            if all(p.get_subscription_count() >= count for p in self.publishers):
                 return True
             time.sleep(0.05)
         return False
 
     def publish(self, samples: Iterable[tuple[int, float]], period_s: float = 0.001) -> None:
-        """Publish each sample, one per ``period_s`` on an absolute schedule."""
+        """Publish each sample of the first topic, one per ``period_s`` (absolute schedule)."""
+        self.publish_rows(([(stamp, value)] for stamp, value in samples), period_s)
+
+    def publish_rows(
+        self, rows: Iterable[Sequence[tuple[int, float]]], period_s: float = 0.001
+    ) -> None:
+        """Publish one ``(stamp_ns, value)`` per topic each ``period_s`` (absolute schedule)."""
         start = time.monotonic()
-        for k, (stamp, value) in enumerate(samples):
+        for k, row in enumerate(rows):
             delay = start + k * period_s - time.monotonic()
             if delay > 0:
                 time.sleep(delay)
-            self.publisher.publish(self._build(stamp, value))
-        common.wait_for_acks([self.publisher], 10.0)
+            for publisher, build, (stamp, value) in zip(self.publishers, self._builds, row):
+                publisher.publish(build(stamp, value))
+        common.wait_for_acks(self.publishers, 10.0)
 
     def close(self) -> None:
         """Destroy the node and shut its context down."""
