@@ -173,11 +173,39 @@ class ChainResult:
     cpu_s: dict[str, float] = field(default_factory=dict)  # CPU time of each node (s)
     wall_s: float = 0.0  # from the source's start to the stop (s)
     logs: Path | None = None  # the nodes' log files
+    source: dict[str, Any] | None = None  # pressure source summary
 
     @property
     def failed(self) -> dict[str, int]:
         """Nodes that exited with a non-zero status, and the status."""
         return {name: code for name, code in self.exit_codes.items() if code != 0}
+
+    def sample_losses(self) -> tuple[bool, str]:
+        """Whether every input sample was predicted and recorded, and one line saying so.
+
+        Counts the source's published ``p_i`` samples against the model's predictions and,
+        with a recording, against the recorded inputs and predictions. Without the source's
+        or the model's summary nothing can be said: that is a failure too ("I don't know").
+        """
+        if self.source is None or self.model is None:
+            absent = [n for n, d in (("source", self.source), ("model", self.model)) if d is None]
+            absent_text = " or ".join(absent)
+            return False, f"cannot tell whether samples were lost: no {absent_text} summary"
+        published = int(self.source["published"])
+        predictions = int(self.model["counters"]["predictions"])
+        unpredicted = published - predictions
+        parts = [f"{published} samples published, {predictions} predicted"]
+        parts[0] += f" ({unpredicted} unpredicted)" if unpredicted else ""
+        lost = 0
+        if self.check is not None:
+            inputs, recorded = int(self.check["inputs"]), int(self.check["predictions"])
+            lost = (published - inputs) + (predictions - recorded)
+            parts.append(f"{inputs} inputs and {recorded} predictions recorded ({lost} lost)")
+        elif self.bag is not None:
+            return False, f"{parts[0]}; the recording could not be checked"
+        ok = unpredicted == 0 and lost == 0
+        verdict = "every sample predicted and recorded" if ok else "samples were lost"
+        return ok, f"{verdict}: " + "; ".join(parts)
 
 
 Notice = Callable[[str], None]
@@ -265,6 +293,7 @@ def run_chain(
         nodes.append(start_node("caliper_model", model_parameters, env, logs))
         source_parameters = {
             "recording": str(recording),
+            "statistics_file": str(out_dir / "pressure_source.json"),
             "rate": float(rate),
             "exit_at_end": True,
             "wait_for_subscribers": subscribers,
@@ -342,6 +371,7 @@ def _collect(
         cpu_s=stops.cpu_s,
         wall_s=wall_s,
         logs=logs,
+        source=_read_json(out_dir / "pressure_source.json"),
     )
 
 
@@ -437,6 +467,7 @@ def run_can_chain(
                     "can_interface": "slcan",
                     "can_channel": str(link),
                     "can_bitrate": 1_000_000,
+                    "statistics_file": str(out_dir / "pressure_source.json"),
                 },
                 env,
                 logs,
