@@ -34,11 +34,11 @@ from typing import Any
 import numpy as np
 import yaml
 
-from brake_hil.errors import BrakeHilError
+from brake_hil.errors import BrakeHilError, DdsSecurityError
 from brake_hil.io.recording_reader import list_topics, read_recording
 from brake_hil.live.model_file import load_model
 from brake_hil.physics.excitation import PulsingSchedule
-from brake_hil.runtime import set_realtime_priority
+from brake_hil.runtime import loopback_environment, security_problem, set_realtime_priority
 from brake_hil.topics import (
     MASTER_CYLINDER_PRESSURE,
     MEASURED_OUTPUTS,
@@ -69,12 +69,24 @@ DEFAULT_MODEL = PROJECT / "config" / "rig_default.yaml"
 
 
 def ros_environment(domain_id: int | None = None) -> dict[str, str]:
-    """The environment of a node process: loopback discovery, the run's domain."""
+    """The environment of a node process: DDS on loopback, the run's domain.
+
+    Local-only: the project's loopback profile unless the user set a Fast DDS profile of
+    their own (:func:`brake_hil.runtime.loopback_environment`).
+    """
     env = dict(os.environ)
-    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    if env.get("BRAKE_HIL_DDS_PROFILE") != "loopback":
+        env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    loopback_environment(env)
     env["ROS_DOMAIN_ID"] = str(choose_domain_id() if domain_id is None else domain_id)
     env["PYTHONUNBUFFERED"] = "1"
     return env
+
+
+def _check_security(env: Mapping[str, str]) -> None:
+    problem = security_problem(dict(env))
+    if problem is not None:
+        raise DdsSecurityError(problem)
 
 
 def choose_domain_id() -> int:
@@ -259,6 +271,7 @@ def run_chain(
     load_model(model_file, mean_pressure)  # a bad model file fails here, with one line
     length_s = float(source.time[-1])
     env = ros_environment(domain_id)
+    _check_security(env)
     logs = out_dir / "logs"
     missing: tuple[str, ...] = ()
     has_recorder = recorder and node_available("recorder")
@@ -409,6 +422,7 @@ def run_can_chain(
     say = progress or _ignore
     load_model(model_file, 1.0e6)  # a bad model file fails here, with one line
     env = ros_environment(domain_id)
+    _check_security(env)
     logs = out_dir / "logs"
     bag_name = "chain_can_" + datetime.now(UTC).strftime("%Y_%m_%d-%H_%M_%S")
     link = out_dir / "rig_can"

@@ -47,7 +47,7 @@ from sensor_msgs.msg import FluidPressure
 
 from brake_hil.io.stamped_cdr import FLOAT_FIELDS
 from brake_hil.nodes.settings import parameter_specs
-from brake_hil.runtime import TimingSummary
+from brake_hil.runtime import TimingSummary, loopback_environment, security_problem
 from brake_hil.topics import TopicSpec
 
 if TYPE_CHECKING:
@@ -88,8 +88,12 @@ SettingsT = TypeVar("SettingsT", bound="DataclassInstance")
 
 
 def setup_environment() -> None:
-    """DDS discovery on loopback only, unless ``ROS_AUTOMATIC_DISCOVERY_RANGE`` is set."""
-    os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    """DDS on loopback only, unless ``ROS_AUTOMATIC_DISCOVERY_RANGE`` says otherwise.
+
+    Local-only (``LOCALHOST``, the default) with no Fast DDS profile of the user's: the
+    project's loopback profile (:func:`brake_hil.runtime.loopback_environment`).
+    """
+    loopback_environment(os.environ)
 
 
 def init_ros(args: Sequence[str] | None) -> None:
@@ -426,7 +430,13 @@ def run_node(
     A node that cannot be built from its parameters (``bad_input``) exits 2 with one line;
     ``run`` returns whether the node stayed healthy (exit 0, else 1). ``close()`` and
     ``destroy_node()`` always run, so a recording is finalised even after an error.
+    DDS security asked for where the DDS has no security plugins is one line and exit 2
+    (:func:`brake_hil.runtime.security_problem`), before rclpy starts.
     """
+    problem = security_problem()
+    if problem is not None:
+        print(f"{name}: error: {problem}", file=sys.stderr)
+        return 2
     init_ros(args)
     try:
         node = make_node()
