@@ -11,7 +11,7 @@ Use::
 
     from brake_hil.io.can_daq import CanDaq, DaqStatus
 
-    with CanDaq("slcan", "/tmp/brake_hil_rig_can", 1_000_000, stale_after_s=0.010) as daq:
+    with CanDaq("slcan", "out/chain_can/rig_can", 1_000_000, stale_after_s=0.010) as daq:
         for sample in daq.poll(timeout=0.005):       # list[DecodedSample]
             sample.frame      # DBC message name, e.g. "BRAKE_HYDRAULIC"
             sample.values     # {"p_i": Pa, "p_b": Pa} / {"F_k": N, "x_c": m} / {"p_a": Pa}

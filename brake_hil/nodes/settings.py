@@ -287,7 +287,9 @@ class RigEmulatorSettings:
     )
     can_channel: str = parameter("", "python-can channel (not for slcan_pty)")
     can_bitrate: int = parameter(1_000_000, "CAN bitrate", "bit/s")
-    can_link_path: str = parameter("/tmp/brake_hil_rig_can", "symlink to the pty")
+    can_link_path: str = parameter(
+        "", "symlink to the pty; empty: rig_can in a private temp folder (logged)"
+    )
     dbc_file: str = parameter("", "CAN database; empty: config/brake_rig.dbc")
     frame_id: str = parameter("caliper", "header.frame_id")
     wait_for_subscribers: int = parameter(0, "start once every sample topic has this many")
