@@ -337,8 +337,10 @@ class CaliperModelNode(common.LoopNode):
             self._take_input()
             self._publish(self._runner.tick(time.monotonic_ns()).predictions)
         self._report()
-        if self.context.ok():
-            common.wait_for_acks(self._outputs)
+        if self.context.ok() and not common.wait_for_acks(self._outputs):
+            self.get_logger().warning(
+                f"subscribers had not acknowledged every prediction after {common.ACK_WAIT_S:g} s"
+            )
         summary = self.statistics.summary()
         counters = self.statistics.counters
         self.get_logger().info(

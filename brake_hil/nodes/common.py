@@ -237,7 +237,16 @@ class RawMessageBuilder:
         return bytes(self._template)
 
 
-def wait_for_acks(publishers: Iterable[Any], timeout_s: float = 1.0) -> bool:
+ACK_WAIT_S = 8.0
+"""How long a sample publisher waits at its end for its subscribers' acknowledgements (s).
+
+Under load a subscriber (the recorder) can lag its publisher by seconds; what it has not
+acknowledged when the publisher's participant is destroyed is lost (a replay that exited
+after 1 s lost the last 4.9 s of its samples to a recorder on a machine at load 10). Under the
+10 s a launcher gives a node after SIGINT."""
+
+
+def wait_for_acks(publishers: Iterable[Any], timeout_s: float = ACK_WAIT_S) -> bool:
     """Wait until every reliable subscriber has acknowledged what ``publishers`` sent.
 
     Call it before the node is destroyed: samples still in flight would be lost. True when all

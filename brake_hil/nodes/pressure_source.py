@@ -408,13 +408,19 @@ class PressureSourceNode(Node):
         """Stop publishing, wait for the worker thread, write the statistics file."""
         self._stop.set()
         self._thread.join(2.0)
-        if self.context.ok():
-            common.wait_for_acks(self._outputs.values())
+        self.unacknowledged = False
+        if self.context.ok() and not common.wait_for_acks(self._outputs.values()):
+            self.unacknowledged = True
+            self.get_logger().warning(
+                f"subscribers had not acknowledged every sample after {common.ACK_WAIT_S:g} s: "
+                "the slowest may miss the last ones"
+            )
         if self.settings.statistics_file:
             summary: dict[str, Any] = {
                 "mode": self.mode,
                 "state": self.state,
                 "published": self.published,
+                "unacknowledged": self.unacknowledged,
                 "passes": self.passes,
                 "period_error": self.statistics.total["period_error"].summary().as_dict(),
             }
