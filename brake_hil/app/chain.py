@@ -302,6 +302,7 @@ def run_chain(
             "mean_pressure": mean_pressure,
             "statistics_file": str(out_dir / "caliper_model.json"),
             "realtime_priority": realtime_priority,
+            "wait_for_subscribers": subscribers,  # comparator (and recorder) matched first
         }
         nodes.append(start_node("caliper_model", model_parameters, env, logs))
         source_parameters = {
@@ -452,6 +453,7 @@ def run_can_chain(
                     "model_file": str(model_file),
                     "mean_pressure": mean_pressure,
                     "statistics_file": str(out_dir / "caliper_model.json"),
+                    "wait_for_subscribers": 2,  # comparator and recorder matched first
                 },
                 env,
                 logs,

@@ -133,8 +133,11 @@ class CaliperModelNode(common.LoopNode):
         self.lost = 0  # gaps in the publisher's sequence numbers (middleware drops)
         self._sequence: dict[bytes, int] = {}
         # Taken by the loop itself at each tick (no executor: no second Python thread to
-        # contend for the GIL at the deadline).
-        self._input = common.PolledInput(self, MASTER_CYLINDER_PRESSURE)
+        # contend for the GIL at the deadline). Made once every prediction publisher has
+        # matched wait_for_subscribers readers: a source that waits for its p_i subscribers
+        # then starts only when the predictions of its first sample have their readers.
+        self._input: common.PolledInput | None = None
+        self._subscribe_when_matched()
         self._report_every = max(1, round(settings.diagnostics_period * 1e9 / period_ns))
         self._relock_every = max(1, round(1e9 / period_ns))
         self._last_report = self._last_relock = 0  # report / relock windows (slot numbers)
@@ -160,8 +163,19 @@ class CaliperModelNode(common.LoopNode):
 
     # -- the loop (its own thread) -----------------------------------------------------
 
+    def _subscribe_when_matched(self) -> bool:
+        """Subscribe to ``p_i`` once the prediction publishers have their readers."""
+        wanted = self.settings.wait_for_subscribers
+        if all(publisher.get_subscription_count() >= wanted for publisher in self._outputs):
+            self._input = common.PolledInput(self, MASTER_CYLINDER_PRESSURE)
+            return True
+        return False
+
     def _take_input(self) -> None:
         """Queue every input sample the middleware holds, with its receive time."""
+        if self._input is None and not self._subscribe_when_matched():
+            return
+        assert self._input is not None
         offset = self._wall_to_monotonic
         lock = self._phase_lock
         read = self._input.read

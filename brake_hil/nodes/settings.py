@@ -192,6 +192,9 @@ class CaliperModelSettings:
     diagnostics_period: float = parameter(1.0, "diagnostics period", "s")
     realtime_priority: int = parameter(0, "SCHED_FIFO priority of the loop thread; 0: off")
     statistics_file: str = parameter("", "whole-run timing JSON at shutdown; empty: none")
+    wait_for_subscribers: int = parameter(
+        0, "subscribe to p_i once each prediction publisher has matched this many readers"
+    )
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,6 @@
 """The chain launcher says when samples were lost, and exits non-zero (real nodes, real DDS).
 
-``python -m brake_hil.nodes.chain`` on ``bags/one_washer_lti`` at twice real time, twice:
+``python -m brake_hil.nodes.chain`` on ``bags/one_washer_lti`` (18 s, real time), twice:
 as it is (every sample predicted and recorded: exit 0 and one line saying so), and with the
 recorder stopped (SIGSTOP) for 8 s in the middle, longer than the sample topics' 5 s of
 history: samples are lost, the launcher prints one line saying how many and exits 1. The
@@ -32,8 +32,6 @@ def _launch(out: Path) -> subprocess.Popen[str]:
         "-m",
         "brake_hil.nodes.chain",
         str(RECORDING),
-        "--rate",
-        "2",
         "--out",
         str(out),
     ]
