@@ -61,15 +61,13 @@ def main() -> int:
     loopback_environment(os.environ)
     env = ros_environment()
     os.environ["ROS_DOMAIN_ID"] = env["ROS_DOMAIN_ID"]
-    import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
+    import rclpy
     from rclpy.executors import SingleThreadedExecutor
 
     from brake_hil.nodes import common
 
-    busy = [
-        subprocess.Popen([sys.executable, "-c", "while 1: pass"]) for _ in range(args.busy)
-    ]
+    busy = [subprocess.Popen([sys.executable, "-c", "while 1: pass"]) for _ in range(args.busy)]
     work = Path(tempfile.mkdtemp(prefix="bench_stale_"))
     link = work / "rig_can"
     codec = RigFrameCodec()
@@ -150,7 +148,7 @@ def main() -> int:
     print(f"in the node (last good frame -> STALE published): {_percentiles(in_node)}")
     print(f"end to end (last frame written -> STALE header.stamp): {_percentiles(end_to_end)}")
     print(f"stops without a STALE before the next burst: {missed}")
-    print(f"STALE reports in all (bursts' own hiccups over the threshold included): {len(in_node)}")
+    print(f"STALE reports in all (hiccups over the threshold in bursts included): {len(in_node)}")
     return 0
 
 
