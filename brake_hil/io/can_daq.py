@@ -662,16 +662,27 @@ class SlcanPty:
             except (BlockingIOError, OSError):
                 pass
 
-    def send(self, frames: Iterable[can.Message]) -> int:
-        """Write frames as slcan text; returns how many were written (the rest are dropped)."""
+    def send(self, frames: Iterable[can.Message], wait_s: float = 0.0) -> int:
+        """Write frames as slcan text; returns how many were written (the rest are dropped).
+
+        ``wait_s`` > 0: while the pty's buffer is full (the reader lags), retry a frame for up
+        to that long before dropping it, as a DAQ's own buffer would hold it (for tests whose
+        reader may be starved for a while on a busy machine).
+        """
         self._answer_commands()
         written = 0
         for frame in frames:
             line = slcan_line(frame)
-            try:
-                count = os.write(self._master, line)
-            except (BlockingIOError, OSError):
-                count = 0
+            give_up = time.monotonic() + wait_s
+            while True:
+                try:
+                    count = os.write(self._master, line)
+                except (BlockingIOError, OSError):
+                    count = 0
+                if count or time.monotonic() >= give_up:
+                    break
+                time.sleep(0.0005)
+                self._answer_commands()
             if count == len(line):
                 written += 1
             else:  # a partial line would corrupt the next one: end it

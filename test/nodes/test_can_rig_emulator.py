@@ -35,7 +35,7 @@ def test_emulator_frames_over_slcan_decode_to_the_run_it_plays(tmp_path: Path) -
         "output": "can",
         "can_link_path": str(link),
         "loop": False,
-        "start_delay_s": 1.0,
+        "start_delay_s": 3.0,  # the DAQ here opens the pty first, even on a busy machine
     }
     for name, value in parameters.items():
         command += ["-p", f"{name}:={value}"]

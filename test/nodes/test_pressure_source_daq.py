@@ -63,7 +63,7 @@ def _send(adapter: SlcanPty, codec: RigFrameCodec, first: int, count: int) -> li
             "x_c": -5.0e-5 * phase,
         }
         frames = codec.encode(first + k, values)
-        assert adapter.send(frames) == len(frames)
+        assert adapter.send(frames, wait_s=10.0) == len(frames)  # held while the reader lags
         sent += frames
     return sent
 

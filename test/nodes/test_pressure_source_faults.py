@@ -3,7 +3,7 @@
 This test plays the rig's DAQ on an slcan pseudo-terminal (:class:`SlcanPty`); the source node
 (its own process) reads it. Three phases: 300 good acquisitions; then the DAQ freezes and
 repeats its last acquisition's frames 1 000 times (a counter that does not advance: STALE,
-nothing published as fresh); then ten stops: 50 acquisitions, 200 ms of silence, each stop
+nothing published as fresh); then ten stops: 50 acquisitions, 500 ms of silence, each stop
 reported STALE by the deadline the last frame armed, before the next burst.
 """
 
@@ -25,7 +25,7 @@ from test.nodes.harness import Collector, ros_domain, unique_domain_id
 pytest.importorskip("serial", reason="python-can's slcan interface needs pyserial")
 
 STALE_AFTER_MS = 5.0
-GOOD, FROZEN, STOPS, BURST, SILENCE_S = 300, 1000, 10, 50, 0.2
+GOOD, FROZEN, STOPS, BURST, SILENCE_S = 300, 1000, 10, 50, 0.5
 
 
 def _send(adapter: SlcanPty, frames_per_tick: list[list[Any]]) -> tuple[int, int]:
@@ -35,7 +35,7 @@ def _send(adapter: SlcanPty, frames_per_tick: list[list[Any]]) -> tuple[int, int
     for k, frames in enumerate(frames_per_tick):
         while time.monotonic_ns() < start + k * 1_000_000:
             time.sleep(0.0002)
-        assert adapter.send(frames) == len(frames)
+        assert adapter.send(frames, wait_s=10.0) == len(frames)  # held while the reader lags
     return first, time.time_ns()
 
 
