@@ -56,6 +56,9 @@ def main() -> int:
     parser.add_argument("--stops", type=int, default=200)
     parser.add_argument("--busy", type=int, default=2, help="spinning processes beside it")
     parser.add_argument("--stale-after-ms", type=float, default=5.0)
+    parser.add_argument(
+        "--realtime-priority", type=int, default=0, help="the source's SCHED_FIFO (0: off)"
+    )
     args = parser.parse_args()
 
     loopback_environment(os.environ)
@@ -99,6 +102,7 @@ def main() -> int:
             "can_channel": str(link),
             "stale_after_ms": args.stale_after_ms,
             "statistics_file": str(work / "source.json"),
+            "realtime_priority": args.realtime_priority,
         },
         env,
         work / "logs",
@@ -143,7 +147,8 @@ def main() -> int:
     load = os.getloadavg()
     print(
         f"{len(stops)} stops, stale_after_ms {args.stale_after_ms:g}, {args.busy} busy "
-        f"processes, load average {load[0]:.1f} / {load[1]:.1f}"
+        f"processes, SCHED_FIFO {args.realtime_priority or 'off'}, load average "
+        f"{load[0]:.1f} / {load[1]:.1f}"
     )
     print(f"in the node (last good frame -> STALE published): {_percentiles(in_node)}")
     print(f"end to end (last frame written -> STALE header.stamp): {_percentiles(end_to_end)}")

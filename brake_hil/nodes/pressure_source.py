@@ -295,6 +295,9 @@ class PressureSourceNode(Node):
             for q in self._quantities
         }
         self.state = "acquiring"
+        # The watchdog must get the GIL soon after it wakes at a deadline: hand it over after
+        # 0.5 ms rather than CPython's 5 ms while another thread runs Python code.
+        sys.setswitchinterval(0.0005)
         watchdog = threading.Thread(target=self._watch_stale, name="daq-stale", daemon=True)
         watchdog.start()
         with daq:
