@@ -674,13 +674,16 @@ class SlcanPty:
         for frame in frames:
             line = slcan_line(frame)
             give_up = time.monotonic() + wait_s
+            count = 0
             while True:
                 try:
-                    count = os.write(self._master, line)
+                    count += os.write(self._master, line[count:])
                 except (BlockingIOError, OSError):
-                    count = 0
-                if count or time.monotonic() >= give_up:
+                    pass
+                if count == len(line) or (count == 0 and time.monotonic() >= give_up):
                     break
+                if count and time.monotonic() >= give_up + 0.01:
+                    break  # a partial line: finished below
                 time.sleep(0.0005)
                 self._answer_commands()
             if count == len(line):

@@ -67,20 +67,30 @@ class MatchWatch:
 
     received: tuple[int, int] = (0, 0)  # predicted, measured samples received so far
     paired: int = 0
+    last_arrival_ns: tuple[int | None, int | None] = (None, None)  # monotonic, per side
     arriving_since_ns: int | None = None  # monotonic: both sides arriving since
     last_pair_ns: int | None = None  # monotonic: a new pair last seen
 
     def update(self, pairer: StampPairer, now_ns: int) -> float | None:
-        """Seconds without a new pair while both sides arrive; None when pairing is fine."""
+        """Seconds without a new pair while both sides arrive; None when pairing is fine.
+
+        A side "arrives" while it has grown within ``NO_MATCH_S`` (samples come in bursts on
+        a busy machine: one quiet evaluation does not restart the clock).
+        """
         pending_predicted, pending_measured = pairer.pending
         received = (
             pairer.paired + pairer.unpaired_predicted + pending_predicted,
             pairer.paired + pairer.unpaired_measured + pending_measured,
         )
-        both = received[0] > self.received[0] and received[1] > self.received[1]
+        self.last_arrival_ns = tuple(  # type: ignore[assignment]
+            now_ns if new > old else last
+            for new, old, last in zip(received, self.received, self.last_arrival_ns)
+        )
         self.received = received
         if pairer.paired > self.paired:
             self.paired, self.last_pair_ns = pairer.paired, now_ns
+        window_ns = NO_MATCH_S * 1e9
+        both = all(t is not None and now_ns - t < window_ns for t in self.last_arrival_ns)
         if not both:
             self.arriving_since_ns = None
             return None
