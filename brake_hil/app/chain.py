@@ -469,7 +469,9 @@ def run_can_chain(
                 "loop": False,
                 "output": "can",
                 "can_link_path": str(link),
-                "start_delay_s": 3.0,
+                "wait_for_subscribers": 1,  # the pressure source has opened the pty
+                "wait_timeout_s": 60.0,
+                "start_delay_s": 1.0,
             },
             env,
             logs,

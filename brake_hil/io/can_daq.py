@@ -645,6 +645,12 @@ class SlcanPty:
             self.link_path.symlink_to(self.device_path)
         self.dropped = 0
         self.sent = 0
+        self.reader_open = False  # a reader has sent slcan's open command (``O``)
+
+    def poll_reader(self) -> bool:
+        """Answer the reader's commands; True once it has opened the channel."""
+        self._answer_commands()
+        return self.reader_open
 
     def _answer_commands(self) -> None:
         try:
@@ -656,6 +662,8 @@ class SlcanPty:
                 raise
             return
         acks = incoming.count(b"\r")
+        if b"O\r" in incoming:
+            self.reader_open = True
         if acks:
             try:
                 os.write(self._master, b"\r" * acks)

@@ -240,6 +240,9 @@ class RigEmulatorNode(Node):
         """
         wait_for = self.settings.wait_for_subscribers
         ready = all(p.get_subscription_count() >= wait_for for p, _ in self._outputs)
+        pty = self._can.pty if self._can is not None else None
+        if wait_for > 0 and pty is not None:  # CAN on a pty: its reader has opened it
+            ready = pty.poll_reader() and ready
         waited = time.monotonic() - self._waiting_since
         if not ready and waited < self.settings.wait_timeout_s:
             return

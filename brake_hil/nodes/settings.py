@@ -295,7 +295,9 @@ class RigEmulatorSettings:
     )
     dbc_file: str = parameter("", "CAN database; empty: config/brake_rig.dbc")
     frame_id: str = parameter("caliper", "header.frame_id")
-    wait_for_subscribers: int = parameter(0, "start once every sample topic has this many")
+    wait_for_subscribers: int = parameter(
+        0, "start once every sample topic has this many (and an slcan pty its reader)"
+    )
     wait_timeout_s: float = parameter(30.0, "start anyway after this wait", "s")
     start_delay_s: float = parameter(1.0, "then wait this long before the first sample", "s")
     diagnostics_period_s: float = parameter(1.0, "diagnostics period", "s")
