@@ -16,6 +16,7 @@
      +-- EffectError (ValueError)           an effect is unknown, doubled or out of bounds
      +-- SimulationError (RuntimeError)     the virtual rig's solver failed
      +-- FitError (ArithmeticError)         a model's simulation is not finite where a fit starts
+     +-- DdsSecurityError                   DDS security asked for, and this DDS cannot give it
      +-- CanDaqError                        a CAN acquisition cannot be set up
           +-- DbcError (ValueError)         the CAN database does not describe rig frames
           +-- FrameError (ValueError)       one received frame is refused
@@ -35,6 +36,7 @@ __all__ = [
     "CanDaqError",
     "ChecksumError",
     "DbcError",
+    "DdsSecurityError",
     "EffectError",
     "FrameError",
     "FitError",
@@ -107,6 +109,10 @@ class SimulationError(BrakeHilError, RuntimeError):
 
 class FitError(BrakeHilError, ArithmeticError):
     """A candidate model cannot be fitted: its simulation is not finite at the fit's start."""
+
+
+class DdsSecurityError(BrakeHilError):
+    """``ROS_SECURITY_ENABLE=true``, and the DDS has no security plugins."""
 
 
 class CanDaqError(BrakeHilError):

@@ -34,11 +34,11 @@ from typing import Any
 import numpy as np
 import yaml
 
-from brake_hil.errors import BrakeHilError
+from brake_hil.errors import BrakeHilError, DdsSecurityError
 from brake_hil.io.recording_reader import list_topics, read_recording
 from brake_hil.live.model_file import load_model
 from brake_hil.physics.excitation import PulsingSchedule
-from brake_hil.runtime import set_realtime_priority
+from brake_hil.runtime import loopback_environment, security_problem, set_realtime_priority
 from brake_hil.topics import (
     AIR_PRESSURE,
     MASTER_CYLINDER_PRESSURE,
@@ -70,12 +70,24 @@ DEFAULT_MODEL = PROJECT / "config" / "rig_default.yaml"
 
 
 def ros_environment(domain_id: int | None = None) -> dict[str, str]:
-    """The environment of a node process: loopback discovery, the run's domain."""
+    """The environment of a node process: DDS on loopback, the run's domain.
+
+    Local-only: the project's loopback profile unless the user set a Fast DDS profile of
+    their own (:func:`brake_hil.runtime.loopback_environment`).
+    """
     env = dict(os.environ)
-    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    if env.get("BRAKE_HIL_DDS_PROFILE") != "loopback":
+        env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    loopback_environment(env)
     env["ROS_DOMAIN_ID"] = str(choose_domain_id() if domain_id is None else domain_id)
     env["PYTHONUNBUFFERED"] = "1"
     return env
+
+
+def _check_security(env: Mapping[str, str]) -> None:
+    problem = security_problem(dict(env))
+    if problem is not None:
+        raise DdsSecurityError(problem)
 
 
 def choose_domain_id() -> int:
@@ -174,11 +186,39 @@ class ChainResult:
     cpu_s: dict[str, float] = field(default_factory=dict)  # CPU time of each node (s)
     wall_s: float = 0.0  # from the source's start to the stop (s)
     logs: Path | None = None  # the nodes' log files
+    source: dict[str, Any] | None = None  # pressure source summary
 
     @property
     def failed(self) -> dict[str, int]:
         """Nodes that exited with a non-zero status, and the status."""
         return {name: code for name, code in self.exit_codes.items() if code != 0}
+
+    def sample_losses(self) -> tuple[bool, str]:
+        """Whether every input sample was predicted and recorded, and one line saying so.
+
+        Counts the source's published ``p_i`` samples against the model's predictions and,
+        with a recording, against the recorded inputs and predictions. Without the source's
+        or the model's summary nothing can be said: that is a failure too ("I don't know").
+        """
+        if self.source is None or self.model is None:
+            absent = [n for n, d in (("source", self.source), ("model", self.model)) if d is None]
+            absent_text = " or ".join(absent)
+            return False, f"cannot tell whether samples were lost: no {absent_text} summary"
+        published = int(self.source["published"])
+        predictions = int(self.model["counters"]["predictions"])
+        unpredicted = published - predictions
+        parts = [f"{published} samples published, {predictions} predicted"]
+        parts[0] += f" ({unpredicted} unpredicted)" if unpredicted else ""
+        lost = 0
+        if self.check is not None:
+            inputs, recorded = int(self.check["inputs"]), int(self.check["predictions"])
+            lost = (published - inputs) + (predictions - recorded)
+            parts.append(f"{inputs} inputs and {recorded} predictions recorded ({lost} lost)")
+        elif self.bag is not None:
+            return False, f"{parts[0]}; the recording could not be checked"
+        ok = unpredicted == 0 and lost == 0
+        verdict = "every sample predicted and recorded" if ok else "samples were lost"
+        return ok, f"{verdict}: " + "; ".join(parts)
 
 
 Notice = Callable[[str], None]
@@ -232,6 +272,7 @@ def run_chain(
     load_model(model_file, mean_pressure)  # a bad model file fails here, with one line
     length_s = float(source.time[-1])
     env = ros_environment(domain_id)
+    _check_security(env)
     logs = out_dir / "logs"
     missing: tuple[str, ...] = ()
     has_recorder = recorder and node_available("recorder")
@@ -262,10 +303,12 @@ def run_chain(
             "mean_pressure": mean_pressure,
             "statistics_file": str(out_dir / "caliper_model.json"),
             "realtime_priority": realtime_priority,
+            "wait_for_subscribers": subscribers,  # comparator (and recorder) matched first
         }
         nodes.append(start_node("caliper_model", model_parameters, env, logs))
         source_parameters = {
             "recording": str(recording),
+            "statistics_file": str(out_dir / "pressure_source.json"),
             "rate": float(rate),
             "exit_at_end": True,
             # Each topic's own consumers: the model takes p_i, the comparator the measured
@@ -353,6 +396,7 @@ def _collect(
         cpu_s=stops.cpu_s,
         wall_s=wall_s,
         logs=logs,
+        source=_read_json(out_dir / "pressure_source.json"),
     )
 
 
@@ -390,6 +434,7 @@ def run_can_chain(
     say = progress or _ignore
     load_model(model_file, 1.0e6)  # a bad model file fails here, with one line
     env = ros_environment(domain_id)
+    _check_security(env)
     logs = out_dir / "logs"
     bag_name = "chain_can_" + datetime.now(UTC).strftime("%Y_%m_%d-%H_%M_%S")
     link = out_dir / "rig_can"
@@ -419,6 +464,7 @@ def run_can_chain(
                     "model_file": str(model_file),
                     "mean_pressure": mean_pressure,
                     "statistics_file": str(out_dir / "caliper_model.json"),
+                    "wait_for_subscribers": 2,  # comparator and recorder matched first
                 },
                 env,
                 logs,
@@ -434,7 +480,9 @@ def run_can_chain(
                 "loop": False,
                 "output": "can",
                 "can_link_path": str(link),
-                "start_delay_s": 3.0,
+                "wait_for_subscribers": 1,  # the pressure source has opened the pty
+                "wait_timeout_s": 60.0,
+                "start_delay_s": 1.0,
             },
             env,
             logs,
@@ -448,6 +496,7 @@ def run_can_chain(
                     "can_interface": "slcan",
                     "can_channel": str(link),
                     "can_bitrate": 1_000_000,
+                    "statistics_file": str(out_dir / "pressure_source.json"),
                 },
                 env,
                 logs,

@@ -3,7 +3,8 @@
 Parses the options, runs :func:`brake_hil.app.chain.run_chain` (or
 :func:`~brake_hil.app.chain.run_can_chain` with ``--can-emulator``), prints its notices as
 they come and then the comparator's run summary, the model's timing and where the MCAP is.
-Exit status: 0, 1 when a node exited with an error, 2 on bad input (one line on stderr).
+Exit status: 0; 1 when a node exited with an error, or when an input sample was lost or left
+unpredicted (one line saying how many); 2 on bad input (one line on stderr).
 """
 
 from __future__ import annotations
@@ -115,7 +116,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     for line in result_lines(result):
         print(line)
-    return 1 if result.failed else 0
+    complete, line = result.sample_losses()
+    print(f"chain: {line}", file=sys.stdout if complete else sys.stderr)
+    return 1 if result.failed or not complete else 0
 
 
 def result_lines(result: ChainResult) -> list[str]:

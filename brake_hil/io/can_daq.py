@@ -11,7 +11,7 @@ Use::
 
     from brake_hil.io.can_daq import CanDaq, DaqStatus
 
-    with CanDaq("slcan", "/tmp/brake_hil_rig_can", 1_000_000, stale_after_s=0.010) as daq:
+    with CanDaq("slcan", "out/chain_can/rig_can", 1_000_000, stale_after_s=0.010) as daq:
         for sample in daq.poll(timeout=0.005):       # list[DecodedSample]
             sample.frame      # DBC message name, e.g. "BRAKE_HYDRAULIC"
             sample.values     # {"p_i": Pa, "p_b": Pa} / {"F_k": N, "x_c": m} / {"p_a": Pa}
@@ -29,6 +29,9 @@ bad CRC                   frame dropped                                         
 wrong DLC                 frame dropped                                           dlc_errors
 unknown id, remote frame  frame dropped                                           unknown_ids
 counter gap               samples missing in between are reported, not invented   lost_samples
+counter not advancing     frame dropped (a frozen DAQ: nothing published as       stale_counters
+                          fresh); the status goes STALE ``stale_after_s`` after
+                          the last frame whose counter advanced
 error frame, bus error    counted; status BUS_ERROR for ``error_hold_s``          bus_errors
 silent bus                status STALE once no good frame for ``stale_after_s``   age_s
 adapter lost / not there  bus closed, reopened with exponential backoff           reconnects
@@ -36,7 +39,9 @@ adapter lost / not there  bus closed, reopened with exponential backoff         
 ========================  ======================================================  ============
 
 Status precedence: ADAPTER_LOST > STALE > BUS_ERROR > OK. Before the first good frame the
-status is STALE.
+status is STALE. :attr:`CanDaq.stale_deadline_ns` is the monotonic time at which the status
+turns STALE unless another good frame comes (one deadline armed per good frame), so a
+watchdog can report a silent or frozen DAQ at that moment rather than at its next poll.
 
 Acquisition time: the DAQ's frames carry no clock, only the counter; the stamp is
 ``t0 + counter * GenMsgCycleTime``, where ``t0`` tracks the least-delayed frame seen
@@ -301,6 +306,7 @@ class DaqHealth(NamedTuple):
     unknown_ids: int  # frames dropped: id not in the DBC, or remote frames
     bus_errors: int  # error frames, bus operation errors, unparsable adapter output
     lost_samples: int  # acquisitions missing between received counters, summed over frames
+    stale_counters: int  # frames dropped: their sample counter did not advance (frozen DAQ)
     reconnects: int  # successful re-openings of the bus after a loss
     age_s: float  # time since the last good frame (s); inf before the first
     last_error: str  # the most recent problem, "" if none
@@ -312,6 +318,7 @@ class _CounterClock:
     def __init__(self, period_ns: int) -> None:
         self.period_ns = period_ns
         self._restart_after = max(1, _NS_PER_S // period_ns)  # 1 s backwards: a DAQ restart
+        self.restarts = 0
         self.reset()
 
     def reset(self) -> None:
@@ -332,6 +339,7 @@ class _CounterClock:
             back = COUNTER_MODULUS - delta
             if back > self._restart_after:
                 self.reset()
+                self.restarts += 1
                 return self.stamp(raw, receive_ns)
             unwrapped = self._unwrapped - back
         offset = receive_ns - unwrapped * self.period_ns
@@ -408,6 +416,10 @@ class CanDaq:
         self._retry_wait_s = reconnect_min_s
         self._consecutive_errors = 0
         self._last_good_ns: int | None = None  # monotonic
+        self._stale_after_ns = round(stale_after_s * _NS_PER_S)
+        self.stale_deadline_ns: int | None = None
+        """Monotonic ns at which the status turns STALE unless a good frame comes first;
+        None before the first good frame."""
         self._last_bus_error_ns: int | None = None  # monotonic
         self._last_counter: dict[str, int] = {}
         self._counts = dict.fromkeys(
@@ -418,6 +430,7 @@ class CanDaq:
                 "unknown_ids",
                 "bus_errors",
                 "lost_samples",
+                "stale_counters",
                 "reconnects",
             ),
             0,
@@ -558,14 +571,26 @@ class CanDaq:
             self._last_error = str(err)
             return None
         receive_ns = round(frame.timestamp * _NS_PER_S) if frame.timestamp else time.time_ns()
+        restarts = self._clock.restarts
         counter, stamp_ns = self._clock.stamp(decoded.counter, receive_ns)
+        if self._clock.restarts != restarts:  # the DAQ restarted: its counters start again
+            self._last_counter.clear()
         previous = self._last_counter.get(decoded.name)
+        if previous is not None and counter <= previous:
+            # A frozen DAQ repeats its last frame: nothing new was acquired, so nothing is
+            # fresh (and the deadline is not re-armed).
+            self._counts["stale_counters"] += 1
+            self._last_error = (
+                f"sample counter of {decoded.name} did not advance ({decoded.counter}; "
+                f"{self._counts['stale_counters']} frames dropped)"
+            )
+            return None
         if previous is not None and counter > previous + 1:
             self._counts["lost_samples"] += counter - previous - 1
-        if previous is None or counter > previous or counter < previous - COUNTER_MODULUS // 2:
-            self._last_counter[decoded.name] = counter
+        self._last_counter[decoded.name] = counter
         self._counts["frames_ok"] += 1
-        self._last_good_ns = time.monotonic_ns()
+        self._last_good_ns = now = time.monotonic_ns()
+        self.stale_deadline_ns = now + self._stale_after_ns
         return DecodedSample(decoded.name, decoded.values, counter, stamp_ns, receive_ns)
 
     def health(self) -> DaqHealth:
@@ -574,7 +599,7 @@ class CanDaq:
         age_s = math.inf if self._last_good_ns is None else (now - self._last_good_ns) / 1e9
         if self._bus is None:
             status = DaqStatus.ADAPTER_LOST
-        elif age_s > self.stale_after_s:
+        elif self.stale_deadline_ns is None or now >= self.stale_deadline_ns:
             status = DaqStatus.STALE
         elif (
             self._last_bus_error_ns is not None
@@ -620,6 +645,12 @@ class SlcanPty:
             self.link_path.symlink_to(self.device_path)
         self.dropped = 0
         self.sent = 0
+        self.reader_open = False  # a reader has sent slcan's open command (``O``)
+
+    def poll_reader(self) -> bool:
+        """Answer the reader's commands; True once it has opened the channel."""
+        self._answer_commands()
+        return self.reader_open
 
     def _answer_commands(self) -> None:
         try:
@@ -631,22 +662,38 @@ class SlcanPty:
                 raise
             return
         acks = incoming.count(b"\r")
+        if b"O\r" in incoming:
+            self.reader_open = True
         if acks:
             try:
                 os.write(self._master, b"\r" * acks)
             except (BlockingIOError, OSError):
                 pass
 
-    def send(self, frames: Iterable[can.Message]) -> int:
-        """Write frames as slcan text; returns how many were written (the rest are dropped)."""
+    def send(self, frames: Iterable[can.Message], wait_s: float = 0.0) -> int:
+        """Write frames as slcan text; returns how many were written (the rest are dropped).
+
+        ``wait_s`` > 0: while the pty's buffer is full (the reader lags), retry a frame for up
+        to that long before dropping it, as a DAQ's own buffer would hold it (for tests whose
+        reader may be starved for a while on a busy machine).
+        """
         self._answer_commands()
         written = 0
         for frame in frames:
             line = slcan_line(frame)
-            try:
-                count = os.write(self._master, line)
-            except (BlockingIOError, OSError):
-                count = 0
+            give_up = time.monotonic() + wait_s
+            count = 0
+            while True:
+                try:
+                    count += os.write(self._master, line[count:])
+                except (BlockingIOError, OSError):
+                    pass
+                if count == len(line) or (count == 0 and time.monotonic() >= give_up):
+                    break
+                if count and time.monotonic() >= give_up + 0.01:
+                    break  # a partial line: finished below
+                time.sleep(0.0005)
+                self._answer_commands()
             if count == len(line):
                 written += 1
             else:  # a partial line would corrupt the next one: end it

@@ -27,6 +27,14 @@ the input status saying so (WARN); late real samples whose stamps the hold alrea
 dropped. Input state changes are reported at once, the rest every ``diagnostics_period``.
 ``sched_fifo`` on diagnostics reports whether ``realtime_priority`` took effect.
 
+Faults never pass as healthy. A NaN or infinite ``p_i`` is not stepped (the model holds its
+last good state and input), counted, and ``caliper_model: input`` goes ERROR naming its stamp
+at once. A step whose outputs are not finite is not published, counted, and the model starts
+again from the equilibrium at the next good input (``caliper_model: model`` ERROR). Each stays
+ERROR for ``FAULT_ERROR_S`` after the last one, then WARN with its count for the rest of the
+run. A sample stamped at or before the last stepped one is dropped and counted (WARN): no two
+predictions ever carry one stamp.
+
 Diagnostics (``/diagnostics``): ``caliper_model: loop`` (period error, tick work, step time,
 input wait (arrival to its tick), input-to-prediction latency (arrival to published), stamp
 age (stamp to published): median, p99, p99.9, max in us over the last report window; ticks,
@@ -66,6 +74,9 @@ from brake_hil.runtime import (
 from brake_hil.topics import MASTER_CYLINDER_PRESSURE, PREDICTED_OUTPUTS
 
 NAME = "caliper_model"
+FAULT_ERROR_S = 5.0
+"""A non-finite input or state keeps its status at ERROR this long (s), then WARN for the run."""
+FAULT_COUNTERS = ("nonfinite_inputs", "nonfinite_states", "stamps_backwards")
 INPUT_LEVELS = {
     InputState.WAITING: common.STALE,
     InputState.FRESH: common.OK,
@@ -102,7 +113,11 @@ class CaliperModelNode(common.LoopNode):
             silent_after_ns=round(settings.input_silent_ms * 1e6),
             hold_mode=hold_mode,
             statistics=self.statistics,
+            restart=self.model.stepper,
         )
+        # Faults seen (count, monotonic ns of the last change): reported at once, ERROR for
+        # FAULT_ERROR_S after the last one, WARN for the rest of the run.
+        self._faults = dict.fromkeys(FAULT_COUNTERS, (0, 0))
         self._phase_lock = PhaseLock(period_ns) if settings.phase_lock else None
         self._builders = [
             common.RawMessageBuilder(spec, settings.frame_id) for spec in PREDICTED_OUTPUTS
@@ -118,8 +133,11 @@ class CaliperModelNode(common.LoopNode):
         self.lost = 0  # gaps in the publisher's sequence numbers (middleware drops)
         self._sequence: dict[bytes, int] = {}
         # Taken by the loop itself at each tick (no executor: no second Python thread to
-        # contend for the GIL at the deadline).
-        self._input = common.PolledInput(self, MASTER_CYLINDER_PRESSURE)
+        # contend for the GIL at the deadline). Made once every prediction publisher has
+        # matched wait_for_subscribers readers: a source that waits for its p_i subscribers
+        # then starts only when the predictions of its first sample have their readers.
+        self._input: common.PolledInput | None = None
+        self._subscribe_when_matched()
         self._report_every = max(1, round(settings.diagnostics_period * 1e9 / period_ns))
         self._relock_every = max(1, round(1e9 / period_ns))
         self._last_report = self._last_relock = 0  # report / relock windows (slot numbers)
@@ -145,8 +163,19 @@ class CaliperModelNode(common.LoopNode):
 
     # -- the loop (its own thread) -----------------------------------------------------
 
+    def _subscribe_when_matched(self) -> bool:
+        """Subscribe to ``p_i`` once the prediction publishers have their readers."""
+        wanted = self.settings.wait_for_subscribers
+        if all(publisher.get_subscription_count() >= wanted for publisher in self._outputs):
+            self._input = common.PolledInput(self, MASTER_CYLINDER_PRESSURE)
+            return True
+        return False
+
     def _take_input(self) -> None:
         """Queue every input sample the middleware holds, with its receive time."""
+        if self._input is None and not self._subscribe_when_matched():
+            return
+        assert self._input is not None
         offset = self._wall_to_monotonic
         lock = self._phase_lock
         read = self._input.read
@@ -183,7 +212,8 @@ class CaliperModelNode(common.LoopNode):
                 if not prediction.held:
                     add("input_wait", wake - prediction.arrival_ns)
         slot = tick.slot
-        if result.state_changed or slot // self._report_every != self._last_report:
+        new_fault = self._note_faults(tick.wake_ns)
+        if new_fault or result.state_changed or slot // self._report_every != self._last_report:
             self._last_report = slot // self._report_every
             self._report()
         if self._phase_lock is not None and slot // self._relock_every != self._last_relock:
@@ -191,6 +221,24 @@ class CaliperModelNode(common.LoopNode):
             phase = self._phase_lock.propose(self._loop.phase_ns)
             if phase is not None:
                 self._loop.request_phase(phase)
+
+    def _note_faults(self, now_ns: int) -> bool:
+        """Record fault counters that moved since the last tick; True when one did."""
+        counters = self.statistics.counters
+        moved = False
+        for name, (count, _) in self._faults.items():
+            value = getattr(counters, name)
+            if value != count:
+                self._faults[name] = (value, now_ns)
+                moved = True
+        return moved
+
+    def _fault_level(self, name: str, now_ns: int) -> int:
+        """OK when ``name`` never counted, ERROR within FAULT_ERROR_S of its last, else WARN."""
+        count, since = self._faults[name]
+        if count == 0:
+            return common.OK
+        return common.ERROR if now_ns - since < FAULT_ERROR_S * 1e9 else common.WARN
 
     def _publish(self, predictions: Sequence[Any]) -> None:
         builders, publishers = self._builders, self._outputs
@@ -247,6 +295,20 @@ class CaliperModelNode(common.LoopNode):
         holding = self._runner.hold_mode is HoldMode.HOLD and state is InputState.SILENT
         if holding and counters.held:
             level, message = common.WARN, message + f"; holding last input ({counters.held} held)"
+        self._note_faults(now)
+        if counters.nonfinite_inputs:
+            level = max(level, self._fault_level("nonfinite_inputs", now))
+            stamp = self._runner.last_nonfinite_stamp_ns or 0
+            message += (
+                f"; non-finite p_i at stamp {stamp / 1e9:.3f} s not stepped, input held "
+                f"({counters.nonfinite_inputs} so far)"
+            )
+        if counters.stamps_backwards:
+            level = max(level, common.WARN)
+            message += (
+                f"; {counters.stamps_backwards} samples stamped at or before their predecessor "
+                "dropped (never two predictions with one stamp)"
+            )
         input_values: list[tuple[str, object]] = [
             ("state", state.value),
             ("silence_ms", -1.0 if silence is None else silence / 1e6),
@@ -257,6 +319,8 @@ class CaliperModelNode(common.LoopNode):
             ("lost_in_transport", self.lost),
             ("missing_samples", counters.missing_samples),
             ("stamps_backwards", counters.stamps_backwards),
+            ("nonfinite_inputs", counters.nonfinite_inputs),
+            ("last_nonfinite_stamp_ns", self._runner.last_nonfinite_stamp_ns or 0),
             ("held", counters.held),
             ("superseded", counters.superseded),
             ("hold_mode", self._runner.hold_mode.value),
@@ -264,13 +328,20 @@ class CaliperModelNode(common.LoopNode):
         model_values = [
             ("model_file", str(self.model.path)),
             ("mean_pressure_pa", self.model.mean_pressure),
+            ("nonfinite_states", counters.nonfinite_states),
+            ("state_resets", counters.state_resets),
         ]
+        model_level, model_message = common.OK, self.model.description
+        if counters.nonfinite_states:
+            model_level = self._fault_level("nonfinite_states", now)
+            model_message = (
+                f"non-finite model state {counters.nonfinite_states} times (not published); "
+                f"reset to the equilibrium at the next good input {counters.state_resets} times"
+            )
         return [
             common.diagnostic_status(f"{NAME}: loop", loop_level, loop_message, loop_values),
             common.diagnostic_status(f"{NAME}: input", level, message, input_values),
-            common.diagnostic_status(
-                f"{NAME}: model", common.OK, self.model.description, model_values
-            ),
+            common.diagnostic_status(f"{NAME}: model", model_level, model_message, model_values),
         ]
 
     def close(self) -> None:
@@ -280,8 +351,10 @@ class CaliperModelNode(common.LoopNode):
             self._take_input()
             self._publish(self._runner.tick(time.monotonic_ns()).predictions)
         self._report()
-        if self.context.ok():
-            common.wait_for_acks(self._outputs)
+        if self.context.ok() and not common.wait_for_acks(self._outputs):
+            self.get_logger().warning(
+                f"subscribers had not acknowledged every prediction after {common.ACK_WAIT_S:g} s"
+            )
         summary = self.statistics.summary()
         counters = self.statistics.counters
         self.get_logger().info(

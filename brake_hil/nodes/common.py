@@ -47,7 +47,7 @@ from sensor_msgs.msg import FluidPressure
 
 from brake_hil.io.stamped_cdr import FLOAT_FIELDS
 from brake_hil.nodes.settings import NODE_SETTINGS, help_text, parameter_specs
-from brake_hil.runtime import TimingSummary
+from brake_hil.runtime import TimingSummary, loopback_environment, security_problem
 from brake_hil.topics import TopicSpec
 
 if TYPE_CHECKING:
@@ -88,8 +88,12 @@ SettingsT = TypeVar("SettingsT", bound="DataclassInstance")
 
 
 def setup_environment() -> None:
-    """DDS discovery on loopback only, unless ``ROS_AUTOMATIC_DISCOVERY_RANGE`` is set."""
-    os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    """DDS on loopback only, unless ``ROS_AUTOMATIC_DISCOVERY_RANGE`` says otherwise.
+
+    Local-only (``LOCALHOST``, the default) with no Fast DDS profile of the user's: the
+    project's loopback profile (:func:`brake_hil.runtime.loopback_environment`).
+    """
+    loopback_environment(os.environ)
 
 
 def init_ros(args: Sequence[str] | None) -> None:
@@ -275,7 +279,16 @@ class RawMessageBuilder:
         return bytes(self._template)
 
 
-def wait_for_acks(publishers: Iterable[Any], timeout_s: float = 1.0) -> bool:
+ACK_WAIT_S = 8.0
+"""How long a sample publisher waits at its end for its subscribers' acknowledgements (s).
+
+Under load a subscriber (the recorder) can lag its publisher by seconds; what it has not
+acknowledged when the publisher's participant is destroyed is lost (a replay that exited
+after 1 s lost the last 4.9 s of its samples to a recorder on a machine at load 10). Under the
+10 s a launcher gives a node after SIGINT."""
+
+
+def wait_for_acks(publishers: Iterable[Any], timeout_s: float = ACK_WAIT_S) -> bool:
     """Wait until every reliable subscriber has acknowledged what ``publishers`` sent.
 
     Call it before the node is destroyed: samples still in flight would be lost. True when all
@@ -470,10 +483,16 @@ def run_node(
     ``destroy_node()`` always run, so a recording is finalised even after an error.
     ``-h``/``--help`` prints the node's usage and parameters (:func:`help_text`) and exits 0
     before rclpy starts: nothing is built, advertised or written.
+    DDS security asked for where the DDS has no security plugins is one line and exit 2
+    (:func:`brake_hil.runtime.security_problem`), before rclpy starts.
     """
     if asks_for_help(args):
         print(help_text(name) if name in NODE_SETTINGS else f"usage: {name} [--ros-args ...]")
         return 0
+    problem = security_problem()
+    if problem is not None:
+        print(f"{name}: error: {problem}", file=sys.stderr)
+        return 2
     init_ros(args)
     try:
         node = make_node()

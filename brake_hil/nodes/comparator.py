@@ -14,6 +14,9 @@ each cycle holds both mean crossings; a late timer scores every cycle that fell 
 is skipped. Levels
 come from :class:`~brake_hil.analysis.stamp_scoring.Thresholds` on the window's metrics: OK, WARN,
 ERROR; STALE while there is nothing paired; OK with "not steady" during ramps and pauses.
+While predictions and measurements of a channel both arrive but none has paired for
+``NO_MATCH_S`` (a model stamping with its own clock, a source re-stamping), the channel and the
+summary are ERROR: "no prediction matches a measurement stamp", published every evaluation.
 
 One thread does the node's work: every quarter cycle (50 ms) it takes what the six subscriptions
 hold (no Python callback per message: six 1 kHz topics cost a few per cent of a core), and
@@ -28,9 +31,11 @@ as JSON.
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 import math
 import struct
 import sys
+import time
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray
@@ -52,6 +57,48 @@ from brake_hil.runtime import DeadlineLoop, Tick
 from brake_hil.topics import MEASURED_OUTPUTS, OUTPUT_CHANNELS, PREDICTED_OUTPUTS
 
 NAME = "comparator"
+NO_MATCH_S = 3.0
+"""ERROR once both sides of a channel arrive but nothing has paired for this long (s)."""
+
+
+@dataclass
+class MatchWatch:
+    """Watches one channel's pairing: do predictions still match measurement stamps?"""
+
+    received: tuple[int, int] = (0, 0)  # predicted, measured samples received so far
+    paired: int = 0
+    last_arrival_ns: tuple[int | None, int | None] = (None, None)  # monotonic, per side
+    arriving_since_ns: int | None = None  # monotonic: both sides arriving since
+    last_pair_ns: int | None = None  # monotonic: a new pair last seen
+
+    def update(self, pairer: StampPairer, now_ns: int) -> float | None:
+        """Seconds without a new pair while both sides arrive; None when pairing is fine.
+
+        A side "arrives" while it has grown within ``NO_MATCH_S`` (samples come in bursts on
+        a busy machine: one quiet evaluation does not restart the clock).
+        """
+        pending_predicted, pending_measured = pairer.pending
+        received = (
+            pairer.paired + pairer.unpaired_predicted + pending_predicted,
+            pairer.paired + pairer.unpaired_measured + pending_measured,
+        )
+        self.last_arrival_ns = tuple(  # type: ignore[assignment]
+            now_ns if new > old else last
+            for new, old, last in zip(received, self.received, self.last_arrival_ns)
+        )
+        self.received = received
+        if pairer.paired > self.paired:
+            self.paired, self.last_pair_ns = pairer.paired, now_ns
+        window_ns = NO_MATCH_S * 1e9
+        both = all(t is not None and now_ns - t < window_ns for t in self.last_arrival_ns)
+        if not both:
+            self.arriving_since_ns = None
+            return None
+        if self.arriving_since_ns is None:
+            self.arriving_since_ns = now_ns
+        since = max(self.arriving_since_ns, self.last_pair_ns or self.arriving_since_ns)
+        silent_s = (now_ns - since) / 1e9
+        return silent_s if silent_s >= NO_MATCH_S else None
 
 
 class ComparatorNode(common.LoopNode):
@@ -77,6 +124,9 @@ class ComparatorNode(common.LoopNode):
             for channel in OUTPUT_CHANNELS
         }
         self.cycles: dict[str, list[dict[str, float]]] = {c: [] for c in OUTPUT_CHANNELS}
+        self._watches = {channel: MatchWatch() for channel in OUTPUT_CHANNELS}
+        self._no_match: dict[str, float | None] = dict.fromkeys(OUTPUT_CHANNELS)
+        self.no_match_reports = 0  # evaluations at which a channel had no match
         self._period_ns = round(self.period_s * 1e9)
         self._next_cycle_end: int | None = None  # stamp (ns) ending the next cycle to score
         self._aligned = False  # cycles start at a peak of p_b (after the first steady window)
@@ -122,6 +172,13 @@ class ComparatorNode(common.LoopNode):
     def _evaluate(self) -> None:
         """Score every cycle whose window (and guard period) the paired samples now cover."""
         windows = {channel: pairer.window() for channel, pairer in self.pairers.items()}
+        now = time.monotonic_ns()
+        self._no_match = {
+            channel: self._watches[channel].update(pairer, now)
+            for channel, pairer in self.pairers.items()
+        }
+        no_match = any(value is not None for value in self._no_match.values())
+        self.no_match_reports += no_match
         newest = [int(w.stamps_ns[-1]) for w in windows.values() if w.stamps_ns.size]
         if not newest:
             self._publish(self._statuses(windows, None)[0])
@@ -137,7 +194,7 @@ class ComparatorNode(common.LoopNode):
             published = True
             if steady and not self._aligned:
                 self._align(windows[OUTPUT_CHANNELS[0]])
-        if not published and self.evaluations == 0:
+        if not published and (self.evaluations == 0 or no_match):
             self._publish(self._statuses(windows, None)[0])
 
     def _align(self, window: PairedWindow) -> None:
@@ -184,12 +241,19 @@ class ComparatorNode(common.LoopNode):
                 worst = max(worst, level)
         self.evaluations += cycle_end is not None
         scored = min(len(cycles) for cycles in self.cycles.values())
+        message = f"{scored} steady cycles scored"
+        unmatched = [channel for channel, value in self._no_match.items() if value is not None]
+        if unmatched:
+            worst = common.ERROR
+            message = f"no prediction matches a measurement stamp ({', '.join(unmatched)}); "
+            message += f"{scored} steady cycles scored"
         statuses.append(
             common.diagnostic_status(
                 f"{NAME}: summary",
                 worst,
-                f"{scored} steady cycles scored",
+                message,
                 {
+                    "no_match_reports": self.no_match_reports,
                     "cycles_evaluated": self.evaluations,
                     "cycles_scored": scored,
                     "corrupt_messages": self.corrupt,
@@ -234,6 +298,13 @@ class ComparatorNode(common.LoopNode):
                 values.append(("cycle_level", common.LEVEL_NAMES[cycle_level]))
             else:
                 values.append(("cycle_note", result.reason))
+        no_match_s = self._no_match[channel]
+        if no_match_s is not None:
+            level = common.ERROR
+            message = (
+                f"no prediction matches a measurement stamp for {no_match_s:.1f} s "
+                f"({pairer.paired} paired in all)"
+            )
         return common.diagnostic_status(f"{NAME}: {channel}", level, message, values), level
 
     def summary(self) -> dict[str, Any]:

@@ -23,11 +23,15 @@ time. Two modes:
     decoded with the DBC ``dbc_file`` by :class:`~brake_hil.io.can_daq.CanDaq` into ``p_i``,
     ``p_b``, ``F_k``, ``x_c`` (and ``p_a``), stamped with their acquisition time (the DAQ's
     sample counter on the host clock). Every decoded sample is published once; nothing is
-    ever republished, so a silent bus publishes nothing. The DAQ's health is checked after
-    every poll (at most 1 ms apart): a silent or stale input (no good frame for
-    ``stale_after_ms``), bus errors and a lost adapter change the ``pressure_source: daq``
-    diagnostic at once (within ``stale_after_ms`` + 1 ms); a lost adapter is reopened with
-    backoff, without crashing.
+    ever republished, so a silent bus publishes nothing, and a frame whose sample counter
+    does not advance (a frozen DAQ repeating itself) is dropped and counted, never published
+    as fresh. Staleness is a deadline armed per good frame (``stale_after_ms`` after it): a
+    watchdog thread sleeps until that absolute deadline and, unless a good frame has moved
+    it meanwhile, publishes ``pressure_source: daq`` STALE at once (the delay from the last
+    frame to that report is kept: ``stale_report_ms`` on diagnostics, all of them in the
+    statistics file). Bus errors and a lost adapter are reported after the poll that saw
+    them (polls are at most 1 ms apart); a lost adapter is reopened with backoff, without
+    crashing.
 
 Parameters: :class:`~brake_hil.nodes.settings.PressureSourceSettings` (``config/nodes.yaml``).
 """
@@ -109,6 +113,10 @@ class PressureSourceNode(Node):
         self._outputs: dict[TopicSpec, Any] = {}
         self._builders: dict[TopicSpec, common.RawMessageBuilder] = {}
         self._daq: Any = None
+        self._status_lock = threading.Lock()
+        self._last_status: Any = None
+        self._rearm = threading.Event()
+        self.stale_reports_ms: list[float] = []  # last good frame to STALE published (ms)
         if self.mode == "replay":
             self._prepare_replay(
                 settings.recording, settings.stamp_mode, settings.publish_measured
@@ -315,7 +323,11 @@ class PressureSourceNode(Node):
             for q in self._quantities
         }
         self.state = "acquiring"
-        last_status = None
+        # The watchdog must get the GIL soon after it wakes at a deadline: hand it over after
+        # 0.5 ms rather than CPython's 5 ms while another thread runs Python code.
+        sys.setswitchinterval(0.0005)
+        watchdog = threading.Thread(target=self._watch_stale, name="daq-stale", daemon=True)
+        watchdog.start()
         with daq:
             while not self._stop.is_set():
                 for sample in daq.poll(timeout=0.001):
@@ -326,10 +338,56 @@ class PressureSourceNode(Node):
                             route[0].publish(route[1](stamp, value))
                     if "p_i" in sample.values:
                         self.published += 1
-                status = daq.health().status
-                if status is not last_status:
-                    last_status = status
-                    self._report()
+                if not self._report_if_changed() and not self._rearm.is_set():
+                    self._rearm.set()  # fresh again (or never was): the watchdog waits for it
+        self._rearm.set()
+        watchdog.join(1.0)
+
+    def _report_if_changed(self) -> bool:
+        """Publish the DAQ status when it differs from the last one published.
+
+        Returns whether the status is STALE. The delay of a STALE report from the last good
+        frame is kept in :attr:`stale_reports_ms`.
+        """
+        with self._status_lock:
+            daq = self._daq
+            status = daq.health().status
+            stale = bool(status.value == "stale")
+            if status is not self._last_status:
+                self._last_status = status
+                self._report()
+                deadline = daq.stale_deadline_ns
+                if stale and deadline is not None:
+                    since_frame = time.monotonic_ns() - deadline + daq.stale_after_s * 1e9
+                    self.stale_reports_ms.append(since_frame / 1e6)
+            return stale
+
+    def _watch_stale(self) -> None:
+        """Report STALE at the deadline armed by the last good frame (its own thread).
+
+        Sleeps until ``daq.stale_deadline_ns`` (absolute, monotonic); a good frame meanwhile
+        has moved the deadline, so it sleeps again until the new one. Past an unmoved deadline
+        the status is STALE: published at once, then the watchdog waits to be re-armed by the
+        acquisition thread once frames are fresh again.
+        """
+        set_timer_slack(1)
+        set_realtime_priority(self.settings.realtime_priority)
+        daq = self._daq
+        while not self._stop.is_set():
+            deadline = daq.stale_deadline_ns
+            if deadline is None:
+                self._rearm.wait(0.1)
+                continue
+            left = deadline - time.monotonic_ns()
+            if left > 0:
+                self._stop.wait(left / 1e9)
+                continue
+            if daq.stale_deadline_ns != deadline:
+                continue  # a frame came while we woke
+            self._rearm.clear()
+            self._report_if_changed()
+            while not self._stop.is_set() and daq.stale_deadline_ns == deadline:
+                self._rearm.wait(0.1)
 
     # -- reporting -----------------------------------------------------------------------
 
@@ -368,6 +426,8 @@ class PressureSourceNode(Node):
             message = self.state
         values = {
             **{key: value for key, value in health._asdict().items() if key != "status"},
+            "stale_report_ms": self.stale_reports_ms[-1] if self.stale_reports_ms else -1.0,
+            "stale_reports": len(self.stale_reports_ms),
             "published": self.published,
             "interface": self.settings.can_interface,
             "channel": self.settings.can_channel,
@@ -379,13 +439,19 @@ class PressureSourceNode(Node):
         """Stop publishing, wait for the worker thread, write the statistics file."""
         self._stop.set()
         self._thread.join(2.0)
-        if self.context.ok():
-            common.wait_for_acks(self._outputs.values())
+        self.unacknowledged = False
+        if self.context.ok() and not common.wait_for_acks(self._outputs.values()):
+            self.unacknowledged = True
+            self.get_logger().warning(
+                f"subscribers had not acknowledged every sample after {common.ACK_WAIT_S:g} s: "
+                "the slowest may miss the last ones"
+            )
         if self.settings.statistics_file:
             summary: dict[str, Any] = {
                 "mode": self.mode,
                 "state": self.state,
                 "published": self.published,
+                "unacknowledged": self.unacknowledged,
                 "passes": self.passes,
                 "period_error": self.statistics.total["period_error"].summary().as_dict(),
             }
@@ -393,6 +459,7 @@ class PressureSourceNode(Node):
                 health = self._daq.health()._asdict()
                 summary["daq"] = {k: v for k, v in health.items() if k != "status"}
                 summary["daq"]["status"] = health["status"].value
+                summary["daq"]["stale_reports_ms"] = self.stale_reports_ms
             common.write_summary(self.settings.statistics_file, summary)
 
 

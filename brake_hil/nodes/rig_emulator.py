@@ -15,7 +15,10 @@ Outputs (``output``):
     ``sample_counter = k``. ``can_interface: slcan_pty`` (default) makes a pseudo-terminal
     slcan adapter (:class:`~brake_hil.io.can_daq.SlcanPty`) and links it at
     ``can_link_path``, for a pressure source in another process
-    (``can_interface: slcan``, ``can_channel: <can_link_path>``); any other value is a
+    (``can_interface: slcan``, ``can_channel: <can_link_path>``). With ``can_link_path``
+    empty (the default) the link is ``rig_can`` in a private folder of its own
+    (``tempfile.mkdtemp``, mode 0700, removed at exit), never a fixed name in the shared temp
+    folder; its path is logged and on diagnostics (``can``). Any other value is a
     python-can interface with ``can_channel``/``can_bitrate`` (e.g. ``socketcan`` on a rig PC).
 ``both``
     Both at once.
@@ -33,7 +36,10 @@ Health and timing go to ``/diagnostics``.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from pathlib import Path
+import shutil
 import sys
+import tempfile
 import threading
 import time
 from typing import Any, NamedTuple
@@ -121,9 +127,13 @@ class _CanOutput:
         self.codec = RigFrameCodec(dbc or None)
         self.pty: Any = None
         self.bus: Any = None
+        self.private: Path | None = None  # the private folder of the link, when we made it
         if interface == "slcan_pty":
-            self.pty = SlcanPty(link or None)
-            self.where = f"slcan pty {self.pty.device_path}" + (f" (link {link})" if link else "")
+            if not link:
+                self.private = Path(tempfile.mkdtemp(prefix="brake_hil_rig_can_"))
+                link = str(self.private / "rig_can")
+            self.pty = SlcanPty(link)
+            self.where = f"slcan pty {self.pty.device_path} (link {link})"
         else:
             import can
 
@@ -151,6 +161,8 @@ class _CanOutput:
     def close(self) -> None:
         if self.pty is not None:
             self.pty.close()
+            if self.private is not None:
+                shutil.rmtree(self.private, ignore_errors=True)
         if self.bus is not None:
             self.bus.shutdown()
 
@@ -228,6 +240,9 @@ class RigEmulatorNode(Node):
         """
         wait_for = self.settings.wait_for_subscribers
         ready = all(p.get_subscription_count() >= wait_for for p, _ in self._outputs)
+        pty = self._can.pty if self._can is not None else None
+        if wait_for > 0 and pty is not None:  # CAN on a pty: its reader has opened it
+            ready = pty.poll_reader() and ready
         waited = time.monotonic() - self._waiting_since
         if not ready and waited < self.settings.wait_timeout_s:
             return

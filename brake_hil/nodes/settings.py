@@ -194,6 +194,9 @@ class CaliperModelSettings:
     diagnostics_period: float = parameter(1.0, "diagnostics period", "s")
     realtime_priority: int = parameter(0, "SCHED_FIFO priority of the loop thread; 0: off")
     statistics_file: str = parameter("", "whole-run timing JSON at shutdown; empty: none")
+    wait_for_subscribers: int = parameter(
+        0, "subscribe to p_i once each prediction publisher has matched this many readers"
+    )
 
 
 @dataclass(frozen=True)
@@ -299,10 +302,14 @@ class RigEmulatorSettings:
     )
     can_channel: str = parameter("", "python-can channel (not for slcan_pty)")
     can_bitrate: int = parameter(1_000_000, "CAN bitrate", "bit/s")
-    can_link_path: str = parameter("/tmp/brake_hil_rig_can", "symlink to the pty")
+    can_link_path: str = parameter(
+        "", "symlink to the pty; empty: rig_can in a private temp folder (logged)"
+    )
     dbc_file: str = parameter("", "CAN database; empty: config/brake_rig.dbc")
     frame_id: str = parameter("caliper", "header.frame_id")
-    wait_for_subscribers: int = parameter(0, "start once every sample topic has this many")
+    wait_for_subscribers: int = parameter(
+        0, "start once every sample topic has this many (and an slcan pty its reader)"
+    )
     wait_timeout_s: float = parameter(30.0, "start anyway after this wait", "s")
     start_delay_s: float = parameter(1.0, "then wait this long before the first sample", "s")
     diagnostics_period_s: float = parameter(1.0, "diagnostics period", "s")

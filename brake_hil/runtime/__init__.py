@@ -17,6 +17,8 @@ ROS plumbing; the timing and the stepping policy live here:
 * :class:`Histogram` and :class:`LoopStatistics` keep whole-run percentiles in bounded memory
   (1 us bins) beside a window that the diagnostics reset once a report.
 * :func:`replay_deadlines` paces a recording by its stamps at a rate factor.
+* :func:`loopback_environment` and :func:`security_problem` (:mod:`.middleware`): the DDS
+  environment of every path that starts a node (loopback profile, security plugins).
 
 Times: ``*_ns`` are integers in nanoseconds; ``*_us`` floats in microseconds. Monotonic times
 (deadlines, arrivals) come from ``time.monotonic_ns``; stamps are ``header.stamp`` (ns since
@@ -45,6 +47,11 @@ from brake_hil.runtime.deadline_loop import (
     set_realtime_priority,
     set_timer_slack,
     sleep_until,
+)
+from brake_hil.runtime.middleware import (
+    loopback_environment,
+    loopback_profile_path,
+    security_problem,
 )
 from brake_hil.runtime.timing import (
     DEFAULT_PERIOD_NS,
@@ -80,7 +87,10 @@ __all__ = [
     "TickResult",
     "TimingSummary",
     "loop_span_ns",
+    "loopback_environment",
+    "loopback_profile_path",
     "replay_deadlines",
+    "security_problem",
     "set_process_realtime_priority",
     "set_realtime_priority",
     "set_timer_slack",

@@ -6,7 +6,7 @@ The stepping is :class:`CatchUpRunner`.
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from enum import Enum
 import math
@@ -72,8 +72,16 @@ class CatchUpRunner:
     Samples are pushed from the receiving thread (:meth:`push`) and taken by :meth:`tick` on
     the loop thread, all of them, in arrival order: none is skipped, so the live predictions
     equal the batch model on the same samples. Each prediction carries its sample's stamp.
-    Stamp gaps (samples lost upstream) and stamps that do not increase are counted; the
-    sample is stepped anyway.
+    Stamp gaps (samples lost upstream) are counted and the sample is stepped. A sample stamped
+    at or before the last stepped one is counted (``stamps_backwards``) and not stepped: no two
+    predictions ever carry one stamp.
+
+    Non-finite values never reach the model's state. A sample whose value is NaN or infinite
+    is counted (``nonfinite_inputs``) and not stepped: the model holds its last good state
+    and input, and :attr:`last_nonfinite_stamp_ns` names it. A step whose outputs are not
+    finite (a finite but absurd input) is counted (``nonfinite_states``) and not published;
+    the stepper is replaced by a fresh one from ``restart``, so the next good input starts
+    the model again from the equilibrium at that input (counted ``state_resets``).
 
     Silence: after ``late_after_ns`` without a sample the state is LATE, after
     ``silent_after_ns`` SILENT. In :attr:`HoldMode.HOLD`, once SILENT the runner invents one
@@ -90,6 +98,9 @@ class CatchUpRunner:
     hold_mode: HoldMode = HoldMode.REPORT
     statistics: LoopStatistics = field(default_factory=LoopStatistics)
     clock: Clock = time.perf_counter_ns
+    restart: Callable[[], Stepper] | None = None  # a fresh stepper (else ``stepper.reset()``)
+    last_nonfinite_stamp_ns: int | None = field(default=None, init=False)  # last NaN/inf p_i
+    _needs_reset: bool = field(default=False, init=False)
     _queue: deque[Sample] = field(default_factory=deque, init=False, repr=False)
     _state: InputState = field(default=InputState.WAITING, init=False)
     _last_arrival_ns: int | None = field(default=None, init=False)
@@ -138,11 +149,21 @@ class CatchUpRunner:
                     continue
                 if gap <= 0:
                     counters.stamps_backwards += 1
-                elif gap > self.period_ns * 3 // 2 and not self._covered_by_hold:
+                    self._last_arrival_ns = sample.arrival_ns
+                    continue
+                if gap > self.period_ns * 3 // 2 and not self._covered_by_hold:
                     counters.missing_samples += round(gap / self.period_ns) - 1
-            predictions.append(self._step(sample.stamp_ns, sample.value, sample.arrival_ns))
-            stepped += 1
             self._last_arrival_ns = sample.arrival_ns
+            if not math.isfinite(sample.value):
+                counters.nonfinite_inputs += 1
+                self.last_nonfinite_stamp_ns = self._last_stamp_ns = sample.stamp_ns
+                self._covered_by_hold = False
+                continue
+            prediction = self._step(sample.stamp_ns, sample.value, sample.arrival_ns)
+            if prediction is None:
+                continue
+            predictions.append(prediction)
+            stepped += 1
             self._held_since_arrival = 0
             self._covered_by_hold = False
         counters.predictions += stepped
@@ -168,13 +189,32 @@ class CatchUpRunner:
             return InputState.LATE
         return InputState.FRESH
 
-    def _step(self, stamp_ns: int, value: float, arrival_ns: int) -> Prediction:
+    def _step(self, stamp_ns: int, value: float, arrival_ns: int) -> Prediction | None:
+        """One step; None (and a restart due) when its outputs are not finite."""
+        if self._needs_reset:
+            self._needs_reset = False
+            self.statistics.counters.state_resets += 1
         start = self.clock()
         p_b, f_k, x_c = self.stepper.step(value)
         self.statistics.add("step_time", self.clock() - start)
         self._last_stamp_ns = stamp_ns
+        if not (math.isfinite(p_b) and math.isfinite(f_k) and math.isfinite(x_c)):
+            self.statistics.counters.nonfinite_states += 1
+            self._restart()
+            return None
         self._last_value = value
         return Prediction(stamp_ns, p_b, f_k, x_c, arrival_ns, arrival_ns < 0)
+
+    def _restart(self) -> None:
+        """Forget the model's state: the next step starts from its equilibrium."""
+        if self.restart is not None:
+            self.stepper = self.restart()
+        else:
+            reset = getattr(self.stepper, "reset", None)
+            if reset is None:
+                raise TypeError("a stepper without reset() needs CatchUpRunner.restart")
+            reset()
+        self._needs_reset = True
 
     def _hold(self, now_ns: int) -> list[Prediction]:
         """Held predictions that bring the model level with the clock."""
@@ -184,8 +224,10 @@ class CatchUpRunner:
         while self._held_since_arrival < due:
             self._held_since_arrival += 1
             stamp = self._last_stamp_ns + self.period_ns
-            held.append(self._step(stamp, self._last_value, -1))
+            prediction = self._step(stamp, self._last_value, -1)
             self._covered_by_hold = True
+            if prediction is not None:
+                held.append(prediction)
         self.statistics.counters.held += len(held)
         return held
 

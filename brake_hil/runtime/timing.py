@@ -136,6 +136,9 @@ class LoopCounters:
     stamps_backwards: int = 0  # samples stamped at or before their predecessor
     held: int = 0  # predictions invented in hold mode
     superseded: int = 0  # late samples dropped because hold mode had covered their stamp
+    nonfinite_inputs: int = 0  # samples with a NaN/inf value: not stepped (the input held)
+    nonfinite_states: int = 0  # steps whose outputs were not finite: not published
+    state_resets: int = 0  # restarts from the equilibrium after a non-finite state
 
     def as_dict(self) -> dict[str, int]:
         """Plain mapping for JSON and diagnostics."""

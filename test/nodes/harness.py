@@ -22,7 +22,10 @@ from rclpy.node import Node
 
 from brake_hil.app.chain import ros_environment
 from brake_hil.nodes import common
+from brake_hil.runtime import loopback_environment
 from brake_hil.topics import TopicSpec
+
+DDS_PROFILE_KEYS = ("FASTDDS_DEFAULT_PROFILES_FILE", "BRAKE_HIL_DDS_PROFILE")
 
 
 def unique_domain_id() -> int:
@@ -33,9 +36,12 @@ def unique_domain_id() -> int:
 @contextmanager
 def ros_domain(domain_id: int) -> Iterator[dict[str, str]]:
     """Point this process at ``domain_id`` on loopback; yield the node processes' env."""
-    saved = {k: os.environ.get(k) for k in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE")}
+    keys = ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE", *DDS_PROFILE_KEYS)
+    saved = {k: os.environ.get(k) for k in keys}
     os.environ["ROS_DOMAIN_ID"] = str(domain_id)
-    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    if os.environ.get("BRAKE_HIL_DDS_PROFILE") != "loopback":
+        os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    loopback_environment(os.environ)  # this process's collector on loopback too
     try:
         yield ros_environment(domain_id)
     finally:

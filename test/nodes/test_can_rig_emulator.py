@@ -35,7 +35,7 @@ def test_emulator_frames_over_slcan_decode_to_the_run_it_plays(tmp_path: Path) -
         "output": "can",
         "can_link_path": str(link),
         "loop": False,
-        "start_delay_s": 1.0,
+        "start_delay_s": 3.0,  # the DAQ here opens the pty first, even on a busy machine
     }
     for name, value in parameters.items():
         command += ["-p", f"{name}:={value}"]
@@ -83,3 +83,40 @@ def test_emulator_frames_over_slcan_decode_to_the_run_it_plays(tmp_path: Path) -
     steps = np.diff([s.stamp_ns for s in hydraulic])
     assert np.median(steps) == 1_000_000  # acquisition stamps on the 1 kHz grid
     assert np.all(np.abs(steps[len(steps) // 2 :] - 1_000_000) < 500_000)
+
+
+def test_the_default_pty_link_is_in_a_private_temp_folder(tmp_path: Path) -> None:
+    import re
+    import signal
+    import stat
+    import tempfile
+
+    fixed = Path(tempfile.gettempdir()) / "brake_hil_rig_can"
+    existed = fixed.exists() or fixed.is_symlink()
+    command = [sys.executable, "-m", "brake_hil.nodes.rig_emulator", "--ros-args"]
+    for name, value in {**RUN, "output": "can", "wait_timeout_s": 60.0}.items():
+        command += ["-p", f"{name}:={value}"]
+    log_path = tmp_path / "emulator.log"
+    with log_path.open("wb") as log:
+        emulator = subprocess.Popen(command, env=ros_environment(), stdout=log, stderr=log)
+    try:
+        deadline = time.monotonic() + 60.0
+        found = None
+        while found is None and time.monotonic() < deadline and emulator.poll() is None:
+            found = re.search(r"\(link (\S+)\)", log_path.read_text(errors="replace"))
+            time.sleep(0.1)
+        assert found, log_path.read_text()
+        link = Path(found.group(1))
+        folder = link.parent
+        assert folder.parent == Path(tempfile.gettempdir())
+        assert folder.name.startswith("brake_hil_rig_can_") and link.name == "rig_can"
+        mode = folder.lstat()
+        assert stat.S_ISDIR(mode.st_mode) and not stat.S_ISLNK(mode.st_mode)
+        assert stat.S_IMODE(mode.st_mode) == 0o700 and mode.st_uid == os.getuid()
+        assert os.readlink(link).startswith("/dev/pts/")
+    finally:
+        emulator.send_signal(signal.SIGINT)
+        code = emulator.wait(30)
+    assert code == 0, log_path.read_text()
+    assert not folder.exists()  # removed at exit
+    assert (fixed.exists() or fixed.is_symlink()) == existed  # the fixed name is not touched

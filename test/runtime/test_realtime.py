@@ -229,11 +229,51 @@ def test_input_states_follow_the_silence_and_nothing_is_invented(model) -> None:
 
 def test_stamp_gaps_count_missing_samples_and_are_not_filled(model) -> None:  # type: ignore[no-untyped-def]
     runner = Runner(model.stepper())
-    for stamp in (0, 1 * MS, 5 * MS, 5 * MS):
+    for stamp in (0, 1 * MS, 5 * MS, 5 * MS, 4 * MS, 6 * MS):
         runner.push(Sample(stamp, 1e6, 0))
-    assert len(runner.tick(0).predictions) == 4
+    predictions = runner.tick(0).predictions
+    assert [p.stamp_ns for p in predictions] == [0, 1 * MS, 5 * MS, 6 * MS]  # one per stamp
     assert runner.statistics.counters.missing_samples == 3
-    assert runner.statistics.counters.stamps_backwards == 1
+    assert runner.statistics.counters.stamps_backwards == 2
+
+
+def test_a_nonfinite_input_is_not_stepped_and_the_model_holds_its_last_good_state(model) -> None:  # type: ignore[no-untyped-def]
+    pressure = _pressure(40)
+    clean = Runner(model.stepper())
+    faulty = Runner(model.stepper(), restart=model.stepper)
+    for k, value in enumerate(pressure):
+        clean.push(Sample(k * MS, float(value), 0))
+        faulty.push(Sample(k * MS, float("nan") if k in (10, 11) else float(value), 0))
+    reference = {p.stamp_ns: p for p in clean.tick(0).predictions}
+    predictions = faulty.tick(0).predictions
+    counters = faulty.statistics.counters
+    assert [p.stamp_ns for p in predictions] == [k * MS for k in range(40) if k not in (10, 11)]
+    assert counters.nonfinite_inputs == 2 and counters.missing_samples == 0
+    assert faulty.last_nonfinite_stamp_ns == 11 * MS
+    assert all(np.isfinite(p[1:4]).all() for p in predictions)
+    # Up to the NaN the same; after it the model steps from its last good state and input.
+    assert predictions[9] == reference[9 * MS]
+    held_model = model.stepper()
+    for value in [*pressure[:10], *pressure[12:]]:
+        expected = held_model.step(float(value))
+    assert predictions[-1][1:4] == tuple(expected)
+
+
+def test_a_nonfinite_state_is_not_published_and_restarts_from_the_equilibrium(model) -> None:  # type: ignore[no-untyped-def]
+    runner = Runner(model.stepper(), restart=model.stepper)
+    values = [1.6e6] * 5 + [1.79e308] * 40 + [1.2e6] * 5
+    for k, value in enumerate(values):
+        runner.push(Sample(k * MS, value, 0))
+    predictions = runner.tick(0).predictions
+    counters = runner.statistics.counters
+    assert counters.nonfinite_states >= 1 and counters.state_resets >= 1
+    assert len(predictions) + counters.nonfinite_states == len(values)
+    assert all(np.isfinite(p[1:4]).all() for p in predictions)
+    stamps = {p.stamp_ns for p in predictions}
+    restarted = [k for k in range(1, len(values)) if {k * MS, (k - 1) * MS} & stamps == {k * MS}]
+    assert restarted  # the step after a non-finite one starts at the equilibrium of its input
+    first = next(p for p in predictions if p.stamp_ns == restarted[0] * MS)
+    assert first.bore_pressure == pytest.approx(values[restarted[0]], rel=1e-9)
 
 
 def test_hold_mode_free_runs_on_the_last_input_and_flags_it(model) -> None:  # type: ignore[no-untyped-def]

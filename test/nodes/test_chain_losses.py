@@ -1,0 +1,112 @@
+"""The chain launcher says when samples were lost, and exits non-zero (real nodes, real DDS).
+
+``python -m brake_hil.nodes.chain`` on ``bags/one_washer_lti`` (18 s, real time), twice:
+as it is (every sample predicted and recorded: exit 0 and one line saying so), and with the
+recorder stopped (SIGSTOP) for 8 s in the middle, longer than the sample topics' 5 s of
+history: samples are lost, the launcher prints one line saying how many and exits 1. The
+count is checked against the MCAP the recorder left, read with ``mcap`` (not our reader).
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+import re
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from brake_hil.app.chain import ros_environment
+from test.conftest import PROJECT
+
+RECORDING = PROJECT / "bags" / "one_washer_lti"
+SAMPLES = 18_000
+
+
+def _launch(out: Path) -> subprocess.Popen[str]:
+    command = [
+        sys.executable,
+        "-m",
+        "brake_hil.nodes.chain",
+        str(RECORDING),
+        "--out",
+        str(out),
+    ]
+    return subprocess.Popen(
+        command, env=ros_environment(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+
+
+def _recorder_pid(out: Path, timeout_s: float = 60.0) -> int | None:
+    """The pid of this run's recorder: its command line names this run's params file."""
+    params = str(out / "logs" / "recorder.params.yaml")
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        for entry in Path("/proc").iterdir():
+            if not entry.name.isdigit():
+                continue
+            try:
+                arguments = (entry / "cmdline").read_bytes().split(b"\0")
+            except OSError:
+                continue
+            if b"brake_hil.nodes.recorder" in arguments and params.encode() in arguments:
+                return int(entry.name)
+        time.sleep(0.1)
+    return None
+
+
+def _recorded_inputs(out: Path) -> int:
+    from mcap.reader import make_reader
+
+    count = 0
+    for path in sorted(out.glob("chain_*/*.mcap")):
+        with path.open("rb") as stream:
+            for _, channel, _ in make_reader(stream).iter_messages():
+                count += channel.topic == "/brake/master_cylinder/pressure"
+    return count
+
+
+def test_a_complete_run_says_so_and_exits_0(tmp_path: Path) -> None:
+    launcher = _launch(tmp_path)
+    stdout, stderr = launcher.communicate(timeout=300)
+    assert launcher.returncode == 0, stdout + stderr
+    line = f"chain: every sample predicted and recorded: {SAMPLES} samples published, {SAMPLES}"
+    assert line in stdout, stdout
+
+
+def test_samples_lost_by_the_recorder_make_the_chain_fail_with_one_line(tmp_path: Path) -> None:
+    launcher = _launch(tmp_path)
+    pid = _recorder_pid(tmp_path)
+    assert pid is not None, "the recorder did not start"
+    log = tmp_path / "logs" / "pressure_source.log"
+    deadline = time.monotonic() + 120.0
+    while time.monotonic() < deadline and "replaying" not in (
+        log.read_text(errors="replace") if log.exists() else ""
+    ):
+        time.sleep(0.1)
+    time.sleep(2.0)  # the replay is under way
+    os.kill(pid, signal.SIGSTOP)
+    try:
+        time.sleep(8.0)
+    finally:
+        os.kill(pid, signal.SIGCONT)
+    stdout, stderr = launcher.communicate(timeout=300)
+    assert launcher.returncode == 1, stdout + stderr
+    lines = [line for line in stderr.splitlines() if line.startswith("chain: samples were lost")]
+    assert len(lines) == 1, stderr
+    found = re.search(
+        r"(\d+) samples published.*?(\d+) inputs and \d+ predictions recorded "
+        r"\((\d+) lost\)",
+        lines[0],
+    )
+    assert found, lines[0]
+    published, inputs, lost = (int(group) for group in found.groups())
+    assert published == SAMPLES and lost > 0
+    assert inputs == _recorded_inputs(tmp_path) < SAMPLES
+
+
+if not hasattr(signal, "SIGSTOP"):  # pragma: no cover - POSIX only
+    pytestmark = pytest.mark.skip(reason="needs SIGSTOP")
