@@ -323,9 +323,9 @@ class PressureSourceNode(Node):
             for q in self._quantities
         }
         self.state = "acquiring"
-        # The watchdog must get the GIL soon after it wakes at a deadline: hand it over after
-        # 0.5 ms rather than CPython's 5 ms while another thread runs Python code.
-        sys.setswitchinterval(0.0005)
+        # CPython's switch interval stays at 5 ms: at 0.5 ms (tried, for a prompter STALE) the
+        # acquisition thread lost the GIL so often that a 3 s CAN run lost 400-600 of 3000
+        # samples in the pty on a quiet 2-core machine; the watchdog is prompt under SCHED_FIFO.
         watchdog = threading.Thread(target=self._watch_stale, name="daq-stale", daemon=True)
         watchdog.start()
         with daq:
