@@ -32,6 +32,7 @@ from mcap.records import (
     Schema,
 )
 from mcap.stream_reader import StreamReader, breakup_chunk
+from zstandard import ZstdError
 
 MAGIC: Final = b"\x89MCAP0\r\n"
 _FOOTER_OPCODE: Final = 0x02
@@ -137,8 +138,9 @@ def salvage_file(path: Path | str) -> SalvagedFile:
                 found.read_bytes = stream.tell()
                 found.stop = "" if found.finished else "a footer without summary"
                 return found
-            except (McapError, ValueError, RuntimeError, struct.error, EOFError) as err:
-                # zstd raises ValueError subclasses on bad data, lz4.frame RuntimeError
+            except (McapError, ZstdError, ValueError, RuntimeError, struct.error, EOFError) as err:
+                # zstd raises ZstdError (an Exception, not a ValueError) on corrupt data,
+                # lz4.frame RuntimeError
                 found.finished = False
                 found.stop = _reason(err, start) if start else "no MCAP header (bad magic)"
                 return found

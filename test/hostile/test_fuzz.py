@@ -12,7 +12,7 @@ from pathlib import Path
 import tempfile
 from typing import Any
 
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 
 from test.hostile import fuzzing
 from test.hostile.harness import FAILURES
@@ -29,6 +29,8 @@ def _settings(examples: int) -> settings:
 
 @_settings(100)
 @given(fuzzing.recording_damage)
+# A byte flipped inside a zstd chunk: zstandard's ZstdError is no ValueError (CI, stop 16).
+@example(([], ("flip", [(1.0, 1), (0.023348339548065814, 1)]), "compare"))
 def test_damaged_recordings_are_answered_or_refused_in_one_line(
     damaged: tuple[list[tuple[Any, ...]], tuple[Any, ...] | None, str],
 ) -> None:
