@@ -337,7 +337,7 @@ def run_chain(
         time.sleep(1.0)  # the model drains, the comparator scores its last cycle
         wall_s = time.monotonic() - started
     finally:
-        _stop_all(nodes, stops)
+        _stop_all(nodes, stops, out_dir / bag_name if has_recorder else None)
     return _collect(
         out_dir,
         stops,
@@ -351,14 +351,54 @@ def run_chain(
     )
 
 
-def _stop_all(nodes: list[NodeProcess], stops: _Stops) -> None:
-    """Stop the nodes, last started first (source, model, comparator, recorder)."""
+RECORDER_QUIET_S = 2.0
+"""The recorder has caught up when its files have not grown for this long (s)."""
+RECORDER_CATCH_UP_S = 60.0
+"""At most this long the launcher waits for a lagging recorder before it stops it (s)."""
+
+
+def bag_bytes(bag: Path) -> int:
+    """Bytes of every file in ``bag`` (0 when it does not exist yet)."""
+    try:
+        return sum(entry.stat().st_size for entry in bag.iterdir() if entry.is_file())
+    except OSError:
+        return 0
+
+
+def wait_until_quiet(
+    bag: Path,
+    quiet_s: float = RECORDER_QUIET_S,
+    timeout_s: float = RECORDER_CATCH_UP_S,
+    poll_s: float = 0.1,
+) -> bool:
+    """Wait until ``bag`` has not grown for ``quiet_s`` (at most ``timeout_s``); True if so.
+
+    On a busy machine the recorder can lag its publishers by seconds, the backlog held by the
+    middleware (the sample topics' deep history); it commits a chunk at least every
+    ``flush_interval_s`` while it writes, so files that stop growing mean it has caught up.
+    """
+    deadline = time.monotonic() + timeout_s
+    size, since = bag_bytes(bag), time.monotonic()
+    while (now := time.monotonic()) < deadline:
+        if now - since >= quiet_s:
+            return True
+        time.sleep(poll_s)
+        if (current := bag_bytes(bag)) != size:
+            size, since = current, time.monotonic()
+    return False
+
+
+def _stop_all(nodes: list[NodeProcess], stops: _Stops, bag: Path | None = None) -> None:
+    """Stop the nodes, last started first (source, model, comparator, recorder).
+
+    The recorder is stopped once its files stop growing (:func:`wait_until_quiet`).
+    """
     for node in reversed(nodes):
+        if node.name == "recorder" and bag is not None:
+            wait_until_quiet(bag)
         cpu = node.cpu_seconds()
         if cpu is not None:
             stops.cpu_s[node.name] = cpu
-        if node.name == "recorder":
-            time.sleep(1.0)  # let it write what it has queued
         stops.exit_codes[node.name] = stop_node(node)
 
 
@@ -510,7 +550,7 @@ def run_can_chain(
         time.sleep(1.0)
         wall_s = time.monotonic() - started
     finally:
-        _stop_all(nodes, stops)
+        _stop_all(nodes, stops, out_dir / bag_name)
     return _collect(out_dir, stops, wall_s, (), logs, bag_name, model_file, mean_pressure, say)
 
 

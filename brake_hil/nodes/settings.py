@@ -243,8 +243,9 @@ class RecorderSettings:
     """Parameters of the ``recorder`` node (``config/recorder.yaml``).
 
     ``flush_interval_s`` bounds what ``kill -9`` loses (the open chunk is committed once it
-    is that old, or at ``chunk_bytes``); ``qos_depth`` of 5000 is 5 s at 1 kHz, Fast DDS's
-    default per-reader sample limit.
+    is that old, or at ``chunk_bytes``); ``qos_depth`` of 30 000 is 30 s at 1 kHz (a recorder
+    starved for seconds catches up); Fast DDS holds more than 5000 only under a profile that
+    raises its resource limits, as the project's loopback profile does.
     """
 
     output_dir: str = parameter(
@@ -272,7 +273,7 @@ class RecorderSettings:
     discovery_interval_s: float = parameter(
         0.2, "search the ROS graph for new topics this often", "s"
     )
-    qos_depth: int = parameter(5000, "history of the reliable subscriptions", "samples")
+    qos_depth: int = parameter(30_000, "history of the reliable subscriptions", "samples")
 
 
 @dataclass(frozen=True)

@@ -28,7 +28,7 @@ from rclpy.context import Context
 from rclpy.node import Node
 import yaml
 
-from brake_hil.app.chain import ros_environment
+from brake_hil.app.chain import ros_environment, wait_until_quiet
 from brake_hil.io.recording_reader import read_recording
 from brake_hil.nodes import common
 from brake_hil.topics import AIR_PRESSURE, MASTER_CYLINDER_PRESSURE, MEASURED_OUTPUTS
@@ -230,3 +230,32 @@ def test_a_recorder_killed_mid_run_leaves_a_readable_recording(
     assert min(lengths.values()) >= killed_at - 1000 * (2 * flush_interval + 0.25)
     recording = read_recording(bag, required=SAMPLE_TOPICS)
     assert recording.time.size >= min(lengths.values()) - 1
+
+
+def test_a_recorder_starved_for_8_s_catches_up_and_loses_nothing(
+    tmp_path: Path, publisher_and_domain: tuple[Publisher, int]
+) -> None:
+    # A busy runner can starve the recorder for seconds: the recorder is stopped (SIGSTOP)
+    # for 8 s while 1 kHz samples keep coming, longer than the 5 s history the sample topics
+    # had (Fast DDS's default limit), which lost what came in between. The 30 s history of
+    # SAMPLE_QOS and the loopback profile's resource limits hold it until the recorder runs.
+    publisher, domain = publisher_and_domain
+    count, paused_s = 10_000, 8.0
+    with recorder_process(tmp_path, domain) as recorder:
+        publisher.wait_for_recorder()
+        publisher.start(count)
+        while publisher.published < 1000:
+            time.sleep(0.01)
+        recorder.send_signal(signal.SIGSTOP)
+        paused_at = publisher.published
+        time.sleep(paused_s)
+        samples_while_paused = publisher.published - paused_at
+        recorder.send_signal(signal.SIGCONT)
+        publisher.join()
+        assert wait_until_quiet(tmp_path / "bag", timeout_s=60.0), "the recorder never caught up"
+        recorder.send_signal(signal.SIGINT)
+        assert recorder.wait(20) == 0, (tmp_path / "recorder.log").read_text()
+    assert publisher.published == count
+    assert samples_while_paused > 5000  # more than the old history held
+    topics = [s.name for s in SAMPLE_TOPICS] + ["/diagnostics"]
+    check_recording(tmp_path / "bag", topics, count)
