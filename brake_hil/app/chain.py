@@ -187,6 +187,7 @@ class ChainResult:
     wall_s: float = 0.0  # from the source's start to the stop (s)
     logs: Path | None = None  # the nodes' log files
     source: dict[str, Any] | None = None  # pressure source summary
+    expected: int | None = None  # input samples the source was to publish (None: unknown)
 
     @property
     def failed(self) -> dict[str, int]:
@@ -196,9 +197,11 @@ class ChainResult:
     def sample_losses(self) -> tuple[bool, str]:
         """Whether every input sample was predicted and recorded, and one line saying so.
 
-        Counts the source's published ``p_i`` samples against the model's predictions and,
-        with a recording, against the recorded inputs and predictions. Without the source's
-        or the model's summary nothing can be said: that is a failure too ("I don't know").
+        Counts the source's published ``p_i`` samples against the run's (``expected``: a
+        source stopped before the end of its run, by a timeout on a starved machine, is a
+        failure), the model's predictions and, with a recording, the recorded inputs and
+        predictions. Without the source's or the model's summary nothing can be said: that is a
+        failure too ("I don't know").
         """
         if self.source is None or self.model is None:
             absent = [n for n, d in (("source", self.source), ("model", self.model)) if d is None]
@@ -208,6 +211,9 @@ class ChainResult:
         predictions = int(self.model["counters"]["predictions"])
         unpredicted = published - predictions
         parts = [f"{published} samples published, {predictions} predicted"]
+        if self.expected is not None and published != self.expected:
+            parts[0] = f"{published} of the run's {self.expected} samples published"
+            parts[0] += f", {predictions} predicted"
         parts[0] += f" ({unpredicted} unpredicted)" if unpredicted else ""
         lost = 0
         if self.check is not None:
@@ -216,8 +222,11 @@ class ChainResult:
             parts.append(f"{inputs} inputs and {recorded} predictions recorded ({lost} lost)")
         elif self.bag is not None:
             return False, f"{parts[0]}; the recording could not be checked"
-        ok = unpredicted == 0 and lost == 0
+        short = self.expected is not None and published != self.expected
+        ok = unpredicted == 0 and lost == 0 and not short
         verdict = "every sample predicted and recorded" if ok else "samples were lost"
+        if short and unpredicted == 0 and lost == 0:
+            verdict = "the run was cut short"
         return ok, f"{verdict}: " + "; ".join(parts)
 
 
@@ -348,6 +357,7 @@ def run_chain(
         model_file,
         mean_pressure,
         say,
+        expected=int(source.time.size),
     )
 
 
@@ -412,6 +422,7 @@ def _collect(
     model_file: Path,
     mean_pressure: float,
     say: Notice,
+    expected: int | None = None,
 ) -> ChainResult:
     """Read what the nodes left (summaries, the bag) and check the bag."""
     failed = {name: code for name, code in stops.exit_codes.items() if code != 0}
@@ -437,6 +448,7 @@ def _collect(
         wall_s=wall_s,
         logs=logs,
         source=_read_json(out_dir / "pressure_source.json"),
+        expected=expected,
     )
 
 
@@ -551,7 +563,18 @@ def run_can_chain(
         wall_s = time.monotonic() - started
     finally:
         _stop_all(nodes, stops, out_dir / bag_name)
-    return _collect(out_dir, stops, wall_s, (), logs, bag_name, model_file, mean_pressure, say)
+    return _collect(
+        out_dir,
+        stops,
+        wall_s,
+        (),
+        logs,
+        bag_name,
+        model_file,
+        mean_pressure,
+        say,
+        expected=schedule.samples,
+    )
 
 
 def _read_json(path: Path) -> dict[str, Any] | None:

@@ -1,10 +1,12 @@
 """The chain launcher says when samples were lost, and exits non-zero (real nodes, real DDS).
 
 ``python -m brake_hil.nodes.chain`` on ``bags/one_washer_lti`` (18 s, real time), twice:
-as it is (every sample predicted and recorded: exit 0 and one line saying so), and with the
-recorder stopped (SIGSTOP) for 8 s in the middle, longer than the sample topics' 5 s of
-history: samples are lost, the launcher prints one line saying how many and exits 1. The
-count is checked against the MCAP the recorder left, read with ``mcap`` (not our reader).
+as it is (every sample predicted and recorded: exit 0 and one line saying so); with the
+recorder stopped (SIGSTOP) for 8 s in the middle, as a busy runner can starve it (the sample
+topics' 30 s of history hold what comes meanwhile: it catches up, nothing is lost); and with
+the recorder killed (SIGKILL) in the middle: samples are lost, the launcher prints one line
+saying how many and exits 1. The count is checked against the MCAP the recorder left, read
+with ``mcap`` (not our reader).
 """
 
 from __future__ import annotations
@@ -77,22 +79,38 @@ def test_a_complete_run_says_so_and_exits_0(tmp_path: Path) -> None:
     assert line in stdout, stdout
 
 
-def test_samples_lost_by_the_recorder_make_the_chain_fail_with_one_line(tmp_path: Path) -> None:
-    launcher = _launch(tmp_path)
-    pid = _recorder_pid(tmp_path)
+def _signal_recorder_mid_run(out: Path, signum: int) -> int:
+    """Send ``signum`` to this run's recorder 2 s into the replay; its pid."""
+    pid = _recorder_pid(out)
     assert pid is not None, "the recorder did not start"
-    log = tmp_path / "logs" / "pressure_source.log"
+    log = out / "logs" / "pressure_source.log"
     deadline = time.monotonic() + 120.0
     while time.monotonic() < deadline and "replaying" not in (
         log.read_text(errors="replace") if log.exists() else ""
     ):
         time.sleep(0.1)
     time.sleep(2.0)  # the replay is under way
-    os.kill(pid, signal.SIGSTOP)
+    os.kill(pid, signum)
+    return pid
+
+
+def test_a_recorder_starved_for_8_s_catches_up_and_the_run_is_complete(tmp_path: Path) -> None:
+    launcher = _launch(tmp_path)
+    pid = _signal_recorder_mid_run(tmp_path, signal.SIGSTOP)
     try:
-        time.sleep(8.0)
+        time.sleep(8.0)  # longer than the 5 s of history the sample topics had
     finally:
         os.kill(pid, signal.SIGCONT)
+    stdout, stderr = launcher.communicate(timeout=300)
+    assert launcher.returncode == 0, stdout + stderr
+    line = f"chain: every sample predicted and recorded: {SAMPLES} samples published, {SAMPLES}"
+    assert line in stdout, stdout
+    assert _recorded_inputs(tmp_path) == SAMPLES
+
+
+def test_samples_lost_by_the_recorder_make_the_chain_fail_with_one_line(tmp_path: Path) -> None:
+    launcher = _launch(tmp_path)
+    _signal_recorder_mid_run(tmp_path, signal.SIGKILL)
     stdout, stderr = launcher.communicate(timeout=300)
     assert launcher.returncode == 1, stdout + stderr
     lines = [line for line in stderr.splitlines() if line.startswith("chain: samples were lost")]
