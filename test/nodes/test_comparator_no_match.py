@@ -1,7 +1,7 @@
 """The comparator, as its own process, when predictions never match a measurement stamp.
 
 A publisher in the test process sends the three measured and the three predicted channels at
-1 kHz: 2 s with equal stamps, then 5 s with the predictions stamped 0.5 ms off (a model that
+1 kHz: 4 s with equal stamps, then 5 s with the predictions stamped 0.5 ms off (a model that
 stamps with its own clock). The comparator must say so: ERROR "no prediction matches a
 measurement stamp" on the channels and the summary, a few seconds after the mismatch starts,
 and never on the cycles of the matching samples.
@@ -23,7 +23,7 @@ from brake_hil.topics import MEASURED_OUTPUTS, PREDICTED_OUTPUTS
 from test.nodes.faults import MS, SamplePublisher
 from test.nodes.harness import Collector, ros_domain, unique_domain_id
 
-MATCHING_S, MISMATCHED_S = 2.0, 5.0
+MATCHING_S, MISMATCHED_S = 4.0, 5.0
 MESSAGE = "no prediction matches a measurement stamp"
 
 

@@ -252,6 +252,8 @@ def test_a_recorder_starved_for_8_s_catches_up_and_loses_nothing(
         samples_while_paused = publisher.published - paused_at
         recorder.send_signal(signal.SIGCONT)
         publisher.join()
+        outputs = [p for p, _ in publisher.outputs] + [publisher.diagnostics]
+        assert common.wait_for_acks(outputs, 60.0), "the recorder did not acknowledge all"
         assert wait_until_quiet(tmp_path / "bag", timeout_s=60.0), "the recorder never caught up"
         recorder.send_signal(signal.SIGINT)
         assert recorder.wait(20) == 0, (tmp_path / "recorder.log").read_text()
