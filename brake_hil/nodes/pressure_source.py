@@ -355,11 +355,11 @@ class PressureSourceNode(Node):
             stale = bool(status.value == "stale")
             if status is not self._last_status:
                 self._last_status = status
-                self._report()
                 deadline = daq.stale_deadline_ns
-                if stale and deadline is not None:
+                if stale and deadline is not None:  # kept first: the report carries it
                     since_frame = time.monotonic_ns() - deadline + daq.stale_after_s * 1e9
                     self.stale_reports_ms.append(since_frame / 1e6)
+                self._report()
             return stale
 
     def _watch_stale(self) -> None:

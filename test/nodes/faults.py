@@ -7,13 +7,15 @@ the same QoS as the project's nodes, waiting until the node under test has subsc
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
 import time
 
 import rclpy
 from rclpy.context import Context
 from rclpy.node import Node
 
+from brake_hil.app.chain import NodeProcess, start_node
 from brake_hil.nodes import common
 from brake_hil.topics import TopicSpec
 
@@ -65,3 +67,17 @@ class SamplePublisher:
         """Destroy the node and shut its context down."""
         self.node.destroy_node()
         rclpy.shutdown(context=self._context)
+
+
+def start_can_source(
+    link: Path, env: Mapping[str, str], out: Path, stale_after_ms: float, **parameters: object
+) -> NodeProcess:
+    """``pressure_source`` reading a DAQ over slcan at ``link`` (logs in ``out/logs``)."""
+    settings = {
+        "mode": "can",
+        "can_interface": "slcan",
+        "can_channel": str(link),
+        "stale_after_ms": stale_after_ms,
+        **parameters,
+    }
+    return start_node("pressure_source", settings, env, out / "logs")

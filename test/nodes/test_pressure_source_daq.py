@@ -16,11 +16,12 @@ from typing import Any
 import numpy as np
 import pytest
 
-from brake_hil.app.chain import start_node, stop_node
+from brake_hil.app.chain import stop_node
 from brake_hil.io.can_daq import RigFrameCodec, SlcanPty
 from brake_hil.nodes import common
 from brake_hil.topics import BLOCK_FORCE, BORE_PRESSURE, CALIPER_DISPLACEMENT
 from brake_hil.topics import MASTER_CYLINDER_PRESSURE as P_I
+from test.nodes.faults import start_can_source
 from test.nodes.harness import Collector, ros_domain, unique_domain_id
 
 pytest.importorskip("serial", reason="python-can's slcan interface needs pyserial")
@@ -96,17 +97,7 @@ def daq_run(tmp_path_factory: pytest.TempPathFactory) -> DaqRun:
     with ros_domain(unique_domain_id()) as env:
         collector = Collector(TOPICS, [common.DIAGNOSTICS_TOPIC])
         adapter = SlcanPty(link)
-        source = start_node(
-            "pressure_source",
-            {
-                "mode": "can",
-                "can_interface": "slcan",
-                "can_channel": str(link),
-                "stale_after_ms": STALE_AFTER_MS,
-            },
-            env,
-            out / "logs",
-        )
+        source = start_can_source(link, env, out, STALE_AFTER_MS)
         try:
             # open and waiting: STALE (no frame yet), not ADAPTER_LOST
             assert _wait_for(

@@ -16,10 +16,11 @@ from typing import Any
 
 import pytest
 
-from brake_hil.app.chain import start_node, stop_node
+from brake_hil.app.chain import stop_node
 from brake_hil.io.can_daq import RigFrameCodec, SlcanPty
 from brake_hil.nodes import common
 from brake_hil.topics import MASTER_CYLINDER_PRESSURE as P_I
+from test.nodes.faults import start_can_source
 from test.nodes.harness import Collector, ros_domain, unique_domain_id
 
 pytest.importorskip("serial", reason="python-can's slcan interface needs pyserial")
@@ -65,17 +66,8 @@ def faulty_daq(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     with ros_domain(unique_domain_id()) as env:
         collector = Collector([P_I], [common.DIAGNOSTICS_TOPIC])
         adapter = SlcanPty(link)
-        source = start_node(
-            "pressure_source",
-            {
-                "mode": "can",
-                "can_interface": "slcan",
-                "can_channel": str(link),
-                "stale_after_ms": STALE_AFTER_MS,
-                "statistics_file": str(out / "source.json"),
-            },
-            env,
-            out / "logs",
+        source = start_can_source(
+            link, env, out, STALE_AFTER_MS, statistics_file=str(out / "source.json")
         )
         try:
             deadline = time.monotonic() + 30.0
