@@ -6,9 +6,9 @@ every example is run, its outcome counted (answer, refused, and the failures bad
 traceback, hang, wrong), the slowest time printed, and each failure's damage listed for
 replay. Exit status 1 when any example failed.
 
-Run from the repository root::
+Run from the checkout::
 
-    PYTHONPATH=$PWD .venv/bin/python benchmarks/bench_fuzz.py --recordings 600 --rigs 1000
+    .venv/bin/python benchmarks/bench_fuzz.py --recordings 600 --rigs 1000
 """
 
 from __future__ import annotations
@@ -24,8 +24,11 @@ from typing import Any
 from hypothesis import HealthCheck, given, seed, settings
 from hypothesis import strategies as st
 
-from test.hostile import fuzzing
-from test.hostile.harness import FAILURES, Run
+PROJECT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(PROJECT))
+
+from test.hostile import fuzzing  # noqa: E402
+from test.hostile.harness import FAILURES, Run  # noqa: E402
 
 
 def _run(kind: str, strategy: st.SearchStrategy[Any], examples: int, seed_value: int) -> list[Run]:

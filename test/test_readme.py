@@ -90,3 +90,33 @@ def test_readme_command_works_as_written(command: str, tmp_path: Path) -> None:
         assert "ramp_one_washer: skipped, no steady 5 Hz pulsing to score" in done.stdout
     if "run_chain.sh" in command:
         assert "MCAP recording:" in done.stdout
+
+
+def _benchmark_scripts() -> list[str]:
+    """The benchmark scripts the README's commands run."""
+    found = re.findall(r"benchmarks/bench_\w+\.py", README.read_text())
+    return sorted(set(found))
+
+
+def test_the_readme_names_benchmark_scripts_that_exist() -> None:
+    scripts = _benchmark_scripts()
+    assert len(scripts) >= 5
+    for script in scripts:
+        assert (PROJECT / script).is_file(), script
+
+
+@pytest.mark.parametrize("script", _benchmark_scripts())
+def test_each_benchmark_the_readme_names_starts_as_written(script: str) -> None:
+    # The long runs are skipped above; each script must at least start from the checkout as
+    # the README runs it (python benchmarks/X.py: imports, the project on its path, options).
+    done = subprocess.run(
+        [sys.executable, script, "--help"],
+        cwd=PROJECT,
+        env=dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST"),
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+    assert done.returncode == 0, f"{script}\n{done.stdout[-2000:]}\n{done.stderr[-2000:]}"
+    assert "usage:" in done.stdout
