@@ -299,7 +299,8 @@ def open_unfinished(path: Path) -> SalvagedRecording | None:
     """The recovered messages of an unfinished recording, None when ``path`` is finished.
 
     Logs one line on ``brake_hil.recording`` (stderr when logging is not configured): the
-    recording was unfinished, how many messages were recovered, what was cut.
+    recording was unfinished, how many messages were recovered, what was cut; the record's
+    ``brief`` says it in a few words (``brake-hil`` adds it to a refusal's one line).
 
     Raises:
         RecordingError: unfinished and nothing could be recovered, or unreadable.
@@ -311,5 +312,9 @@ def open_unfinished(path: Path) -> SalvagedRecording | None:
     if reason is None:
         return None
     recording = salvage_recording(path, reason)
-    LOGGER.warning(recording.note())
+    brief = (
+        f"read from an unfinished recording: {recording.message_count} messages recovered "
+        "from its whole chunks"
+    )
+    LOGGER.warning(recording.note(), extra={"brief": brief})
     return recording

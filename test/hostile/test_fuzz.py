@@ -31,6 +31,8 @@ def _settings(examples: int) -> settings:
 @given(fuzzing.recording_damage)
 # A byte flipped inside a zstd chunk: zstandard's ZstdError is no ValueError (CI, stop 16).
 @example(([], ("flip", [(1.0, 1), (0.023348339548065814, 1)]), "compare"))
+# A cut recording refused: the reader's note on the unfinished file was a second stderr line.
+@example(([], ("truncate", 0.7768697535949292), "characterize"))
 def test_damaged_recordings_are_answered_or_refused_in_one_line(
     damaged: tuple[list[tuple[Any, ...]], tuple[Any, ...] | None, str],
 ) -> None:
