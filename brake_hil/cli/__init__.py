@@ -76,22 +76,17 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     """The sub-command ``args.command``; its exit status."""
-    if args.command == "compare":
-        return commands.compare(args)
-    if args.command == "characterize":
-        return commands.characterize(args)
-    if args.command == "diagnose":
-        return commands.diagnose(args)
-    if args.command == "simulate" and uses_virtual_rig(args):
-        return commands.simulate_virtual(args)
     if args.command == "simulate":
+        if uses_virtual_rig(args):
+            return commands.simulate_virtual(args)
         return commands.simulate_lti(args)
-    if args.command == "cases":
-        return commands.cases(args)
-    if args.command == "benchmark":
-        return commands.benchmark(args)
-    if args.command == "regress":
-        return commands.regress(args)
-    if args.command == "recover":
-        return commands.recover(args)
-    return 0
+    run = {
+        "compare": commands.compare,
+        "characterize": commands.characterize,
+        "diagnose": commands.diagnose,
+        "cases": commands.cases,
+        "benchmark": commands.benchmark,
+        "regress": commands.regress,
+        "recover": commands.recover,
+    }.get(args.command)
+    return run(args) if run is not None else 0
