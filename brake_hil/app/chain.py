@@ -210,10 +210,9 @@ class ChainResult:
         published = int(self.source["published"])
         predictions = int(self.model["counters"]["predictions"])
         unpredicted = published - predictions
-        parts = [f"{published} samples published, {predictions} predicted"]
-        if self.expected is not None and published != self.expected:
-            parts[0] = f"{published} of the run's {self.expected} samples published"
-            parts[0] += f", {predictions} predicted"
+        short = self.expected is not None and published != self.expected
+        of_run = f" of the run's {self.expected}" if short else ""
+        parts = [f"{published}{of_run} samples published, {predictions} predicted"]
         parts[0] += f" ({unpredicted} unpredicted)" if unpredicted else ""
         lost = 0
         if self.check is not None:
@@ -222,11 +221,11 @@ class ChainResult:
             parts.append(f"{inputs} inputs and {recorded} predictions recorded ({lost} lost)")
         elif self.bag is not None:
             return False, f"{parts[0]}; the recording could not be checked"
-        short = self.expected is not None and published != self.expected
-        ok = unpredicted == 0 and lost == 0 and not short
-        verdict = "every sample predicted and recorded" if ok else "samples were lost"
-        if short and unpredicted == 0 and lost == 0:
+        whole = unpredicted == 0 and lost == 0
+        verdict = "every sample predicted and recorded" if whole else "samples were lost"
+        if short and whole:
             verdict = "the run was cut short"
+        ok = whole and not short
         return ok, f"{verdict}: " + "; ".join(parts)
 
 
