@@ -204,10 +204,18 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         say(f"fitting {single.name}")
         fitted = _try_fit(Model(calibration, [single], dataset), None, unfitted, say)
         singles.extend(fitted)
-    pairs = _fit_pairs(calibration, dataset, baseline, singles, unfitted, say)
-    hypotheses = singles + pairs
-    summary = summarise(baseline, singles, pairs, dataset.noise_cost(), evidence)
+    ruled_out = unnameable_pairs(baseline, singles)
+    pairs = _fit_pairs(calibration, dataset, baseline, singles, unfitted, say, ruled_out)
+    summary = summarise(baseline, singles, pairs, dataset.noise_cost(), evidence, ruled_out)
     verdict = decide(summary)
+    chosen_set = set(verdict.chosen or ())
+    if chosen_set and any(not chosen_set & set(p) for p in ruled_out):
+        # An unfitted pair would be a rival of this verdict: fit them after all.
+        say("fitting the pairs left out, as rivals of the verdict")
+        pairs = _fit_pairs(calibration, dataset, baseline, singles, unfitted, say)
+        summary = summarise(baseline, singles, pairs, dataset.noise_cost(), evidence)
+        verdict = decide(summary)
+    hypotheses = singles + pairs
     chosen = next((h for h in hypotheses if h.effects == verdict.chosen), None)
     best = max(singles, key=lambda h: _score(baseline, h))
     improved = baseline if chosen is None else chosen
@@ -281,11 +289,13 @@ def _fit_pairs(
     singles: list[Fit],
     unfitted: list[str],
     say: Progress,
+    ruled_out: frozenset[tuple[str, ...]] = frozenset(),
 ) -> list[Fit]:
     """Pairs of the best plausible single with the next ``PAIR_SHORTLIST`` plausible ones.
 
     Fitted whenever the best single cuts the error at least ``PAIR_FIT_RATIO`` times (the
-    decision then weighs them), starting from both singles' fitted parameters.
+    decision then weighs them), starting from both singles' fitted parameters; the pairs in
+    ``ruled_out`` are left out (:func:`unnameable_pairs`).
     """
     eligible = sorted(
         (h for h in singles if _plausible(h)), key=lambda h: _score(baseline, h), reverse=True
@@ -297,12 +307,36 @@ def _fit_pairs(
     pairs = []
     for other in eligible[1 : PAIR_SHORTLIST + 1]:
         names = (best.effects[0], other.effects[0])
+        if names in ruled_out:
+            continue
         say(f"fitting {' + '.join(names)}")
         other_own = len(other.theta) - len(calibration.sigmas)
         start = np.concatenate([best.theta[:own], other.theta[:other_own], best.theta[own:]])
         model = Model(calibration, [candidate(n) for n in names], dataset)
         pairs.extend(_try_fit(model, start, unfitted, say))
     return pairs
+
+
+def unnameable_pairs(baseline: Fit, singles: list[Fit]) -> frozenset[tuple[str, ...]]:
+    """The pairs :func:`_fit_pairs` would fit that :func:`decide` can never name.
+
+    A pair is named only if it cuts the held-out error of the better of its two singles by
+    ``PAIR_SHARE`` of the baseline's; no fit has a negative error, so a pair whose better
+    single already leaves less than that share cannot be named, whatever its fit. Fitting it
+    could change the verdict's confidence only; :func:`decide` charges its worst case
+    instead (:attr:`Summary.pairs_ruled_out`).
+    """
+    eligible = sorted(
+        (h for h in singles if _plausible(h)), key=lambda h: _score(baseline, h), reverse=True
+    )
+    if not eligible:
+        return frozenset()
+    best, limit = eligible[0], PAIR_SHARE * baseline.held_out_cost
+    return frozenset(
+        (best.effects[0], other.effects[0])
+        for other in eligible[1 : PAIR_SHORTLIST + 1]
+        if min(best.held_out_cost, other.held_out_cost) < limit
+    )
 
 
 @dataclass(frozen=True)
@@ -329,6 +363,7 @@ class Summary:
     singles: tuple[Hypothesis, ...]
     pairs: tuple[Hypothesis, ...]
     baseline_channel_nrmse: dict[str, float] = field(default_factory=dict)  # held-out
+    pairs_ruled_out: tuple[tuple[str, ...], ...] = ()  # not fitted: can never be named
 
     @property
     def excess_ratio(self) -> float:
@@ -363,13 +398,19 @@ class Summary:
             singles=hypotheses(document["singles"]),
             pairs=hypotheses(document["pairs"]),
             baseline_channel_nrmse=dict(document.get("baseline_channel_nrmse", {})),
+            pairs_ruled_out=tuple(tuple(p) for p in document.get("pairs_ruled_out", ())),
         )
 
 
 def summarise(
-    baseline: Fit, singles: list[Fit], pairs: list[Fit], noise_cost: float, evidence: Evidence
+    baseline: Fit,
+    singles: list[Fit],
+    pairs: list[Fit],
+    noise_cost: float,
+    evidence: Evidence,
+    pairs_ruled_out: frozenset[tuple[str, ...]] = frozenset(),
 ) -> Summary:
-    """The decision's inputs from the fits."""
+    """The decision's inputs from the fits (and the pairs left unfitted as unnameable)."""
 
     def hypothesis(h: Fit) -> Hypothesis:
         return Hypothesis(
@@ -390,6 +431,7 @@ def summarise(
         singles=tuple(hypothesis(h) for h in singles),
         pairs=tuple(hypothesis(h) for h in pairs),
         baseline_channel_nrmse=dict(baseline.held_out_nrmse),
+        pairs_ruled_out=tuple(sorted(pairs_ruled_out)),
     )
 
 
@@ -422,6 +464,11 @@ def hypothesis_note(summary: Summary, effects: tuple[str, ...], verdict: Verdict
     base = summary.baseline_cost
     known = {h.effects: h for h in (*summary.singles, *summary.pairs)}
     h = known.get(effects)
+    if h is None and effects in summary.pairs_ruled_out:
+        return (
+            f"not fitted: cannot be named (its better single leaves under "
+            f"{100 * PAIR_SHARE:g} % of the baseline's error for a second effect to explain)"
+        )
     if h is None:
         return "not fitted"
     if verdict.chosen == effects:
@@ -536,6 +583,9 @@ def decide(summary: Summary) -> Verdict:
                 for p in summary.pairs
                 if chosen.effects[0] in p.effects and p.plausible
             ]
+            if any(chosen.effects[0] in p for p in summary.pairs_ruled_out):
+                # a pair left unfitted: the worst its fit could do (an error of zero)
+                margins.append(math.log(PAIR_SHARE * base / max(chosen.held_out_cost, 1e-30)))
         else:  # how far the pair clears its better single
             alone = max(log_gains.get((e,), 0.0) for e in chosen.effects)
             margins.append(own - alone - math.log(PAIR_RATIO))

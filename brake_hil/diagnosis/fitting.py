@@ -116,31 +116,77 @@ class Model:
         parts.append(np.array(list(self.calibration.multipliers.values())))
         return np.concatenate(parts)
 
-    def spec(self, window: Window, theta: FloatArray) -> ModelSpec:
-        """The simulator spec of every row of ``theta`` (B, P) for one window."""
+    def spec(self, window: Window | Sequence[Window], theta: FloatArray) -> ModelSpec:
+        """The simulator spec of every row of ``theta`` (B, P) for one window.
+
+        For several windows: ``W * B`` sets, window by window (each window's operating
+        pressure sets its LTI coefficients).
+        """
+        windows = [window] if isinstance(window, Window) else list(window)
         names = list(self.calibration.sigmas)
         rig = self.calibration.rig
         draft = Draft(
             [
-                apply_multipliers(rig, window.mean_pressure, dict(zip(names, row)))
+                apply_multipliers(rig, w.mean_pressure, dict(zip(names, row)))
+                for w in windows
                 for row in theta[:, self.effect_size :]
             ]
         )
+        rows = np.tile(theta, (len(windows), 1))
         column = 0
         for candidate, size in zip(self.candidates, self.sizes):
-            candidate.fill(draft, theta[:, column : column + size], self.context)
+            candidate.fill(draft, rows[:, column : column + size], self.context)
             column += size
         return draft.spec()
+
+    def _span(self, window: Window, span: float | None) -> tuple[int, int, IndexArray]:
+        """First and end sample simulated for ``window`` (from ``PREROLL`` before it), and
+        the mask of the samples inside it."""
+        ds = self.dataset
+        end = window.end if span is None else min(window.end, window.start + span)
+        first = int(np.searchsorted(ds.time, window.start - PREROLL))
+        last = int(np.searchsorted(ds.time, end - 1e-9))
+        inside = ds.time[first:last] >= window.start - 1e-9
+        return first, last, inside
+
+    def simulate_windows(
+        self, windows: Sequence[Window], theta: FloatArray, span: float | None = None
+    ) -> list[tuple[FloatArray, IndexArray]]:
+        """:meth:`simulate` of every window, run as one batch (one step serves them all).
+
+        Windows shorter than the longest are driven on with their last input sample past
+        their end; a causal model's outputs inside a window do not depend on what follows.
+        """
+        ds = self.dataset
+        spans = [self._span(w, span) for w in windows]
+        length = max(last - first for first, last, _ in spans)
+        batch = theta.shape[0]
+        pressure = np.empty((len(windows) * batch, length))
+        starts = np.empty(len(windows) * batch)
+        for k, (first, last, _) in enumerate(spans):
+            rows = slice(k * batch, (k + 1) * batch)
+            pressure[rows, : last - first] = ds.pressure[first:last]
+            pressure[rows, last - first :] = ds.pressure[last - 1]
+            starts[rows] = ds.time[first]
+        outputs = simulate_batch(
+            self.spec(windows, theta),
+            pressure,
+            ds.sample_time,
+            start_time=starts,
+            pressure_ceiling=self.pressure_ceiling,
+        )
+        result = []
+        for k, (first, last, inside) in enumerate(spans):
+            part = outputs[k * batch : (k + 1) * batch, :, : last - first]
+            result.append((part[:, :, inside], np.arange(first, last)[inside]))
+        return result
 
     def simulate(
         self, window: Window, theta: FloatArray, span: float | None = None
     ) -> tuple[FloatArray, IndexArray]:
         """Outputs (B, 3, n) over a window (or its first ``span`` s) and its sample indices."""
         ds = self.dataset
-        end = window.end if span is None else min(window.end, window.start + span)
-        first = int(np.searchsorted(ds.time, window.start - PREROLL))
-        last = int(np.searchsorted(ds.time, end - 1e-9))
-        inside = ds.time[first:last] >= window.start - 1e-9
+        first, last, inside = self._span(window, span)
         outputs = simulate_batch(
             self.spec(window, theta),
             ds.pressure[first:last],
@@ -160,8 +206,7 @@ class Model:
         """Normalised residuals (B, samples) of each row of ``theta`` over ``windows``."""
         scale = self.dataset.scale()
         parts = []
-        for window in windows:
-            outputs, index = self.simulate(window, theta, span)
+        for outputs, index in self.simulate_windows(windows, theta, span):
             for channel, key in enumerate(OUTPUT_CHANNELS):
                 measured = self.dataset.measured[key][index]
                 parts.append(
@@ -180,8 +225,7 @@ class Model:
         scale = self.dataset.scale()
         errors: dict[str, list[FloatArray]] = {key: [] for key in OUTPUT_CHANNELS}
         window_costs = []
-        for window in windows:
-            outputs, index = self.simulate(window, theta[None, :])
+        for outputs, index in self.simulate_windows(windows, theta[None, :]):
             costs = []
             for channel, key in enumerate(OUTPUT_CHANNELS):
                 residual = (outputs[0, channel] - self.dataset.measured[key][index]) / scale[key]

@@ -76,8 +76,11 @@ def _tables(
 
 
 def _simulate_linear(spec: ModelSpec, u: FloatArray, sample_time: float) -> FloatArray:
-    """Linear candidates through the vectorised modal simulation of the LTI model."""
-    out = np.empty((spec.batch, 3, u.size))
+    """Linear candidates through the vectorised modal simulation of the LTI model.
+
+    ``u`` (Pa): one input for every set ``(N,)``, or one per set ``(B, N)``.
+    """
+    out = np.empty((spec.batch, 3, u.shape[-1]))
     modes = (0,) * len(spec.terms)
     for b in range(spec.batch):
         plant = _plant(spec, b, 0.0, 0.0, modes)
@@ -91,7 +94,7 @@ def _simulate_linear(spec: ModelSpec, u: FloatArray, sample_time: float) -> Floa
             sample_time=sample_time,
             output_names=("p_b", "F_k", "x_c"),
         )
-        out[b] = simulate(model, u)
+        out[b] = simulate(model, u if u.ndim == 1 else u[b])
     return _transform(spec, out, sample_time)
 
 
@@ -114,15 +117,22 @@ class Integrator:
     def __init__(
         self,
         spec: ModelSpec,
-        first_pressure: float,
+        first_pressure: float | FloatArray,
         sample_time: float,
         pressure_ceiling: float,
         duration: float,
         pressure_levels: int = 16,
         block_s: float = 1.0,
-        start_time: float = 0.0,
+        start_time: float | FloatArray = 0.0,
     ) -> None:
+        """Every set at its equilibrium at ``first_pressure`` (Pa, one or one per set).
+
+        ``start_time`` (s, one or one per set) is the recording time of the first sample
+        (time-scheduled terms run on recording time); the pressure schedule spans 0 to
+        ``pressure_ceiling`` (Pa) and the time schedule ``duration`` (s) after the latest start.
+        """
         terms = spec.terms
+        first = np.broadcast_to(np.asarray(first_pressure, dtype=float), (spec.batch,))
         self.spec, self.params = spec, spec.params
         self.sample_time, self.block_s = sample_time, block_s
         self.start_time, self.levels = start_time, pressure_levels
@@ -133,20 +143,35 @@ class Integrator:
             if self.on_pressure
             else np.zeros(1)
         )
-        self.blocks = int(np.ceil((start_time + duration) / block_s)) + 1 if self.on_time else 1
+        latest = float(np.max(start_time))
+        self.blocks = int(np.ceil((latest + duration) / block_s)) + 1 if self.on_time else 1
         modes = list(itertools.product(*(range(t.modes) for t in terms)))
         tables = [
             _tables(spec, b, self.grid, self.blocks, block_s, sample_time, modes)
             for b in range(spec.batch)
         ]
-        self.phi = np.stack([t.phi for t in tables])
-        self.g_prev = np.stack([t.g_prev for t in tables])
-        self.g_now = np.stack([t.g_now for t in tables])
-        self.g_w = np.stack([t.g_w for t in tables])
+        phi = np.stack([t.phi for t in tables])  # (B, T, L, M, n, n)
+        # One matrix per schedule entry acting on [z, previous p_i, p_i, explicit inputs]:
+        # a step is one batched product, its entry one flat index per set.
+        system = np.concatenate(
+            [
+                phi,
+                np.stack([t.g_prev for t in tables])[..., None],
+                np.stack([t.g_now for t in tables])[..., None],
+                np.stack([t.g_w for t in tables]),
+            ],
+            axis=-1,
+        )
+        n = phi.shape[-1]
+        self.entries_per_block = phi.shape[2] * phi.shape[3]  # L * M
+        self.modes_per_level = phi.shape[3]
+        self.system = np.ascontiguousarray(system.reshape(spec.batch, -1, n, system.shape[-1]))
         self.out_c = np.stack([t.plant.C for t in tables])
         self.z = np.stack(
-            [-np.linalg.solve(t.plant.A, t.plant.B * first_pressure) for t in tables]
+            [-np.linalg.solve(t.plant.A, t.plant.B * p) for t, p in zip(tables, first)]
         )
+        self.drive = np.zeros((spec.batch, system.shape[-1], 1))  # [z, p_prev, p, explicit]
+        self.states = n
         self.scale, self.index = tables[0].plant.scale, tables[0].plant.index
         self.si = self.z * self.scale  # the states in SI units
         self.rows = np.arange(spec.batch)
@@ -180,15 +205,23 @@ class Integrator:
 
     def outputs(self) -> FloatArray:
         """Current outputs (B, 3): p_b (Pa), F_k (N), x_c (m)."""
-        return np.asarray(np.einsum("bij,bj->bi", self.out_c, self.z), dtype=float)
+        return np.matmul(self.out_c, self.z[:, :, None])[:, :, 0]
 
-    def advance(self, previous_pressure: float, pressure: float) -> FloatArray:
-        """Advance one sample (inputs in Pa, linear between them); return the outputs."""
+    def advance(
+        self, previous_pressure: float | FloatArray, pressure: float | FloatArray
+    ) -> FloatArray:
+        """Advance one sample and return the outputs (B, 3).
+
+        Inputs in Pa, linear between them: one for every set, or one per set (B,).
+        """
         self.step_index += 1
-        block = 0
+        block: IndexArray | int = 0
         if self.on_time:
             now = self.start_time + self.step_index * self.sample_time
-            block = min(int(now / self.block_s), self.blocks - 1)
+            if np.ndim(now):
+                block = np.minimum((now / self.block_s).astype(np.intp), self.blocks - 1)
+            else:
+                block = min(int(now / self.block_s), self.blocks - 1)
         if self.on_pressure:
             p_b = self.value("p_b")
             self.level = np.clip(np.searchsorted(self.grid, p_b), 0, self.levels - 1)
@@ -196,17 +229,22 @@ class Integrator:
         explicit[:] = 0.0
         for step in self.steps:
             step.inputs(self, explicit)
-        mode: IndexArray | int = 0
+        entry: IndexArray | int = block * self.entries_per_block
+        if self.on_pressure:
+            entry = entry + self.level * self.modes_per_level
         for step, stride in self.moded:
             digit = step.mode()
-            mode = mode + (digit if stride == 1 else digit * stride)
-        index = (self.rows, block, self.level, mode)
-        self.z = (
-            np.einsum("bij,bj->bi", self.phi[index], self.z)
-            + self.g_prev[index] * previous_pressure
-            + self.g_now[index] * pressure
-            + np.einsum("bij,bj->bi", self.g_w[index], explicit)
-        )
+            entry = entry + (digit if stride == 1 else digit * stride)
+        drive, n = self.drive, self.states
+        drive[:, :n, 0] = self.z
+        drive[:, n, 0] = previous_pressure
+        drive[:, n + 1, 0] = pressure
+        drive[:, n + 2 :, 0] = explicit
+        if isinstance(entry, int):
+            matrices = self.system[:, entry]
+        else:
+            matrices = self.system[self.rows, entry]
+        self.z = np.matmul(matrices, drive)[:, :, 0]
         self.si = self.z * self.scale
         for step in self.steps:
             step.update(self)
@@ -219,32 +257,36 @@ def simulate_batch(
     sample_time: float,
     pressure_levels: int = 16,
     block_s: float = 1.0,
-    start_time: float = 0.0,
+    start_time: float | FloatArray = 0.0,
     pressure_ceiling: float | None = None,
 ) -> FloatArray:
     """Outputs ``(B, 3, N)`` (p_b Pa, F_k N, x_c m) of every parameter set of ``spec``.
 
-    Driven by ``pressure`` (Pa, one sample per ``sample_time`` s), from the equilibrium at the
-    first sample with every slider relaxed. ``start_time`` (s) is the first sample's time in
-    the recording (time-scheduled terms run on recording time); the pressure schedule spans 0
-    to ``pressure_ceiling`` (Pa; default 1.2 times the input's maximum).
+    Driven by ``pressure`` (Pa, one sample per ``sample_time`` s: ``(N,)`` for every set, or
+    ``(B, N)``, one stretch of input per set, so several windows of a recording run as one
+    batch), from the equilibrium at the first sample with every slider relaxed.
+    ``start_time`` (s, one or one per set) is the first sample's time in the recording
+    (time-scheduled terms run on recording time); the pressure schedule spans 0 to
+    ``pressure_ceiling`` (Pa; default 1.2 times the input's maximum).
     """
     u = np.asarray(pressure, dtype=float)
     if spec.is_linear:
         return _simulate_linear(spec, u, sample_time)
     ceiling = 1.2 * float(u.max()) if pressure_ceiling is None else pressure_ceiling
+    samples = u.shape[-1]
     integrator = Integrator(
         spec,
-        float(u[0]),
+        u[..., 0],
         sample_time,
         ceiling,
-        u.size * sample_time,
+        samples * sample_time,
         pressure_levels,
         block_s,
-        start_time,
+        start_time if np.ndim(start_time) == 0 else np.asarray(start_time, dtype=float),
     )
-    out = np.empty((spec.batch, 3, u.size))
+    out = np.empty((spec.batch, 3, samples))
     out[:, :, 0] = integrator.outputs()
-    for k in range(1, u.size):
-        out[:, :, k] = integrator.advance(u[k - 1], u[k])
+    columns = u.T if u.ndim == 2 else u
+    for k in range(1, samples):
+        out[:, :, k] = integrator.advance(columns[k - 1], columns[k])
     return _transform(spec, out, sample_time)

@@ -74,6 +74,7 @@ class _Slider(Step):
         self.state: IndexArray = np.zeros(batch, dtype=np.intp)
         self.offset = np.zeros(batch)  # x_p - x_c at which the stuck spring is relaxed
         self.direction = np.zeros(batch)  # +1 slipping while applying, -1 while releasing
+        self.symmetric = bool(np.array_equal(element.apply_threshold, element.release_threshold))
 
     def mode(self) -> IndexArray:
         """STUCK or SLIPPING per set."""
@@ -86,31 +87,46 @@ class _Slider(Step):
             self.element.bore_friction * np.abs(state.value("p_b") * state.value("x_c"))
         )
 
+    def _held(self, state: State) -> FloatArray:
+        """Slip force per set in its current slip direction (N)."""
+        e = self.element
+        own = (
+            e.apply_threshold
+            if self.symmetric
+            else np.where(self.direction > 0, e.apply_threshold, e.release_threshold)
+        )
+        return np.asarray(own + self._bore_threshold(state))
+
     def inputs(self, state: State, explicit: FloatArray) -> None:
         """The stuck spring's offset force, or the friction force while slipping."""
         e = self.element
-        slip_force = np.where(
-            self.direction > 0, e.apply_threshold, e.release_threshold
-        ) + self._bore_threshold(state)
         explicit[:, RELATIVE_FORCE] += np.where(
-            self.state == STUCK, e.spring * self.offset, -self.direction * slip_force
+            self.state == STUCK, e.spring * self.offset, -self.direction * self._held(state)
         )
 
     def update(self, state: State) -> None:
-        """Stick-slip transitions after a step (return mapping)."""
+        """Stick-slip transitions after a step (return mapping).
+
+        Most steps change nothing; only the sets that switch are written.
+        """
         e, spring = self.element, self.element.spring
         seal = state.seal()
-        velocity = state.seal_velocity()
         extra = self._bore_threshold(state)
-        mode, direction = self.state, self.direction
+        stuck = self.state == STUCK
         trial = spring * (seal - self.offset)
-        start_apply = (mode == STUCK) & (trial > e.apply_threshold + extra)
-        start_release = (mode == STUCK) & (trial < -(e.release_threshold + extra))
-        stick = (mode == SLIPPING) & (direction * velocity <= 0.0)
-        held = np.where(direction > 0, e.apply_threshold, e.release_threshold) + extra
-        self.offset = np.where(stick, seal - direction * held / spring, self.offset)
-        self.direction = np.where(start_apply, 1.0, np.where(start_release, -1.0, direction))
-        self.state = np.where(start_apply | start_release, SLIPPING, np.where(stick, STUCK, mode))
+        start_apply = stuck & (trial > e.apply_threshold + extra)
+        start_release = stuck & (trial < -(e.release_threshold + extra))
+        stick = ~stuck & (self.direction * state.seal_velocity() <= 0.0)
+        if stick.any():
+            held = self._held(state)
+            self.offset[stick] = seal[stick] - self.direction[stick] * held[stick] / spring[stick]
+            self.state[stick] = STUCK
+        if start_apply.any():
+            self.direction[start_apply] = 1.0
+            self.state[start_apply] = SLIPPING
+        if start_release.any():
+            self.direction[start_release] = -1.0
+            self.state[start_release] = SLIPPING
 
 
 @dataclass(frozen=True, eq=False)
