@@ -11,7 +11,8 @@ the verdicts, and only then opens the labels to score them:
 * ``unexplained`` recall on cases whose physics no candidate models;
 * held-out NRMSE improvement on the mismatched channel (baseline / improved, the channel
   with the worst baseline NRMSE) on correctly diagnosed cases;
-* seconds per recording, and the confidence's reliability (accuracy per confidence bin).
+* seconds per recording, and the confidence's reliability (accuracy per confidence bin),
+  with the share of *sure* verdicts (confidence ``SURE`` or more) that are wrong.
 
 :func:`run_benchmark` is the command: the cases diagnosed over
 :func:`~brake_hil.app.parallel.parallel_map`, then scored; it prints nothing and returns a
@@ -35,7 +36,9 @@ from brake_hil.io.recording_reader import read_recording
 from brake_hil.physics.rig import load_rig
 from brake_hil.topics import MASTER_CYLINDER_PRESSURE, MEASURED_OUTPUTS
 
-CONFIDENCE_BINS = ((0.0, 0.5), (0.5, 0.7), (0.7, 0.9), (0.9, 1.01))
+CONFIDENCE_BINS = ((0.0, 0.5), (0.5, 0.7), (0.7, 0.8), (0.8, 0.9), (0.9, 0.95), (0.95, 1.01))
+SURE = 0.9
+"""A verdict at this confidence or more is *sure*: at most 1 in 20 of them may be wrong."""
 
 
 @dataclass(frozen=True)
@@ -158,6 +161,8 @@ def score(results: list[CaseResult], labels: dict[str, list[str]]) -> dict[str, 
                     "accuracy": share(inside, correct),
                 }
             )
+    sure = [(r, labels[r.case]) for r in results if r.confidence >= SURE and not r.error]
+    wrong_sure = [r.case for r, lab in sure if not correct(r, lab)]
     seconds = [r.seconds for r in results]
     return {
         "cases": len(results),
@@ -183,6 +188,9 @@ def score(results: list[CaseResult], labels: dict[str, list[str]]) -> dict[str, 
         "seconds_per_recording_mean": statistics.fmean(seconds) if seconds else float("nan"),
         "seconds_per_recording_max": max(seconds) if seconds else float("nan"),
         "reliability": reliability,
+        "sure_verdicts": len(sure),
+        "wrong_sure_verdicts": wrong_sure,
+        "wrong_share_of_sure_verdicts": len(wrong_sure) / len(sure) if sure else float("nan"),
         "errors": [r.case + ": " + r.error for r in results if r.error],
         "per_case": [{**asdict(r), "label": labels[r.case]} for r in results],
     }

@@ -209,6 +209,7 @@ def cases(args: argparse.Namespace) -> int:
             jobs=args.jobs,
             error_scale=args.error_scale,
             kinds=tuple(args.kind),
+            family=args.family,
             progress=progress,
         )
     print(f"wrote {result.count} cases under {result.cases_dir}; labels in {result.labels_path}")
@@ -260,6 +261,15 @@ def benchmark(args: argparse.Namespace) -> int:
     mean = _figure(figures["seconds_per_recording_mean"], 1.0, "6.1f")
     most = _figure(figures["seconds_per_recording_max"], 1.0, ".1f")
     print(f"{'seconds per recording, mean / max':40s}{mean} / {most}")
+    wrong = _figure(figures["wrong_share_of_sure_verdicts"], 100.0, "6.1f", " %")
+    print(f"{'wrong among verdicts at >= 0.9':40s}{wrong}  of {figures['sure_verdicts']} verdicts")
+    print("confidence     cases  mean  right")
+    for row in figures["reliability"]:  # type: ignore[attr-defined]
+        low, high = row["confidence"]
+        print(
+            f"{low:4.2f}-{high:4.2f}  {row['cases']:7d}  {row['mean_confidence']:4.2f}  "
+            f"{100 * row['accuracy']:5.1f} %"
+        )
     _json_written(result.json_path)
     return 0
 

@@ -15,7 +15,7 @@ file the test engineer wrote.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 import math
 from pathlib import Path
 from typing import Any
@@ -31,6 +31,7 @@ from brake_hil.diagnosis.dataset import Dataset, prepare
 from brake_hil.diagnosis.evidence import Evidence, collect
 from brake_hil.diagnosis.fitting import Fit, Model, fit
 from brake_hil.diagnosis.improved_model import ImprovedModel
+from brake_hil.diagnosis.physics_checks import CheckOutcome, check_hypothesis
 from brake_hil.errors import BrakeHilError, FitError
 from brake_hil.physics.rig import Rig
 from brake_hil.topics import OUTPUT_CHANNELS
@@ -58,6 +59,12 @@ UNEXPLAINED_NRMSE = 0.005
 """A held-out baseline NRMSE above this with no candidate accepted is 'unexplained'. The
 calibrated baseline of a recording with a parameter error only misses by about 0.1 % (noise
 and the virtual rig's richer line); 0.5 % is five times that."""
+STAND_IN_MARGIN = 0.0
+"""Decision margin (log units) a verdict keeps at most when a better-scoring hypothesis was
+set aside by a physics check (:mod:`.physics_checks`): confidence at most
+``_confidence(0)``, about 0.85."""
+CHECK_ROUNDS = 3
+"""Verdicts checked at most: a verdict that fails is set aside and the next one checked."""
 PAIR_SHORTLIST = 8
 PAIR_FIT_RATIO = 1.3
 """Pairs are fitted when the best single cuts the held-out error at least this much."""
@@ -81,6 +88,7 @@ class Diagnosis:
     dataset: Dataset
     summary: Summary
     unfitted: tuple[str, ...] = ()  # hypotheses left out: not finite where their fit starts
+    checks: dict[str, list[CheckOutcome]] = field(default_factory=dict)  # physics checks run
 
     def improved_model(self, rig_path: Path) -> ImprovedModel:
         """The improved model in the form the caliper-model node loads."""
@@ -145,6 +153,10 @@ class Diagnosis:
                 "metrics": self.improved_metrics,
             },
             "unfitted_hypotheses": list(self.unfitted),
+            "physics_checks": {
+                effects: [asdict(outcome) for outcome in outcomes]
+                for effects, outcomes in self.checks.items()
+            },
             "decision_inputs": self.summary.as_dict(),
             "split": {
                 "train": [[w.start, w.end] for w in self.dataset.train],
@@ -216,6 +228,21 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         summary = summarise(baseline, singles, pairs, dataset.noise_cost(), evidence)
         verdict = decide(summary)
     hypotheses = singles + pairs
+    checks: dict[str, list[CheckOutcome]] = {}
+    for _ in range(CHECK_ROUNDS):
+        named = next((h for h in hypotheses if h.effects == verdict.chosen), None)
+        if named is None or "+".join(named.effects) in checks:
+            break
+        key = "+".join(named.effects)
+        say(f"checking the physics of {key}")
+        checks[key] = check_hypothesis(
+            calibration, dataset, baseline, named, required_ratio(summary)
+        )
+        failed = next((c for c in checks[key] if not c.passed), None)
+        if failed is None:
+            break
+        summary = replace(summary, stand_ins={**summary.stand_ins, key: failed.finding})
+        verdict = decide(summary)
     chosen = next((h for h in hypotheses if h.effects == verdict.chosen), None)
     best = max(singles, key=lambda h: _score(baseline, h))
     improved = baseline if chosen is None else chosen
@@ -247,6 +274,8 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
             )
     else:
         explanation = _explain(baseline, chosen, evidence, baseline_metrics, improved_metrics)
+    for effects, finding in summary.stand_ins.items():
+        explanation += f" Set aside, {effects.replace('+', ' and ')}: {finding}."
     return Diagnosis(
         recording=str(recording.path),
         effects=verdict.effects,
@@ -262,6 +291,7 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         dataset=dataset,
         summary=summary,
         unfitted=tuple(unfitted),
+        checks=checks,
     )
 
 
@@ -364,6 +394,7 @@ class Summary:
     pairs: tuple[Hypothesis, ...]
     baseline_channel_nrmse: dict[str, float] = field(default_factory=dict)  # held-out
     pairs_ruled_out: tuple[tuple[str, ...], ...] = ()  # not fitted: can never be named
+    stand_ins: dict[str, str] = field(default_factory=dict)  # "a+b": the physics check failed
 
     @property
     def excess_ratio(self) -> float:
@@ -399,6 +430,7 @@ class Summary:
             pairs=hypotheses(document["pairs"]),
             baseline_channel_nrmse=dict(document.get("baseline_channel_nrmse", {})),
             pairs_ruled_out=tuple(tuple(p) for p in document.get("pairs_ruled_out", ())),
+            stand_ins=dict(document.get("stand_ins", {})),
         )
 
 
@@ -481,6 +513,8 @@ def hypothesis_note(summary: Summary, effects: tuple[str, ...], verdict: Verdict
         )
     if not h.plausible:
         return "not named: its fitted values describe a stand-in, not this physics"
+    if "+".join(effects) in summary.stand_ins:
+        return f"not named (physics check): {summary.stand_ins['+'.join(effects)]}"
     if len(effects) > 1:
         members = [known[(e,)] for e in effects if (e,) in known]
         better = min(members, key=lambda m: m.held_out_cost, default=None)
@@ -494,7 +528,7 @@ def hypothesis_note(summary: Summary, effects: tuple[str, ...], verdict: Verdict
                 f"{PAIR_RATIO:g} times again and by {100 * PAIR_SHARE:g} % of the baseline's; "
                 f"this pair cuts it {again:.2f} times, by {100 * share:.1f} %"
             )
-    required = CLEAR_ACCEPT_RATIO if summary.excess_ratio >= CLEAR_EXCESS else ACCEPT_RATIO
+    required = required_ratio(summary)
     if gain < required:
         return f"not named: cuts the error {gain:.2f} times, under the {required:g} required"
     if not all(
@@ -542,7 +576,7 @@ def decide(summary: Summary) -> Verdict:
         return math.log(gain(h)) - PARAMETER_PENALTY * h.parameters
 
     def admissible(h: Hypothesis) -> bool:
-        if not h.plausible:
+        if not h.plausible or "+".join(h.effects) in summary.stand_ins:
             return False
         if len(h.effects) == 1:
             return True
@@ -562,12 +596,20 @@ def decide(summary: Summary) -> Verdict:
     if summary.excess_ratio < NOISE_EXCESS:
         margin = math.log(NOISE_EXCESS / max(summary.excess_ratio, 1e-9))
         return Verdict((), _confidence(margin), None)
-    required = CLEAR_ACCEPT_RATIO if summary.excess_ratio >= CLEAR_EXCESS else ACCEPT_RATIO
+    required = required_ratio(summary)
     ranked = sorted((*summary.singles, *summary.pairs), key=score, reverse=True)
     eligible = [h for h in ranked if admissible(h)]
     chosen = next((h for h in eligible if gain(h) >= required and holds_everywhere(h)), None)
     log_gains = {h.effects: math.log(gain(h)) for h in ranked}
     best = max((log_gains[h.effects] for h in eligible), default=0.0)
+    # A hypothesis that would have been named but failed a physics check: the verdict that
+    # replaces it is no surer than STAND_IN_MARGIN allows.
+    rejected = [
+        h
+        for h in ranked
+        if "+".join(h.effects) in summary.stand_ins and gain(h) >= required and h.plausible
+    ]
+    cap = [STAND_IN_MARGIN] if rejected else []
     if chosen is not None:
         own = log_gains[chosen.effects]
         rivals = [g for effects, g in log_gains.items() if not set(effects) & set(chosen.effects)]
@@ -589,13 +631,19 @@ def decide(summary: Summary) -> Verdict:
         else:  # how far the pair clears its better single
             alone = max(log_gains.get((e,), 0.0) for e in chosen.effects)
             margins.append(own - alone - math.log(PAIR_RATIO))
-        return Verdict(chosen.effects, _confidence(min(margins)), chosen.effects)
+        return Verdict(chosen.effects, _confidence(min(margins + cap)), chosen.effects)
     unexplained = summary.baseline_nrmse > UNEXPLAINED_NRMSE
     margin = min(
         math.log(required) - best,
         abs(math.log(max(summary.baseline_nrmse, 1e-12) / UNEXPLAINED_NRMSE)),
+        *cap,
     )
     return Verdict(("unexplained",) if unexplained else (), _confidence(margin), None)
+
+
+def required_ratio(summary: Summary) -> float:
+    """The held-out improvement a hypothesis must reach to be named."""
+    return CLEAR_ACCEPT_RATIO if summary.excess_ratio >= CLEAR_EXCESS else ACCEPT_RATIO
 
 
 def _confidence(margin: float) -> float:

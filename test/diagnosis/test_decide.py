@@ -124,3 +124,48 @@ def test_noise_floor_is_the_cycle_to_cycle_variance() -> None:
     )
     scale = np.mean([np.ptp(v[(time >= 1.0) & (time < 5.0)]) for v in measured.values()])
     assert dataset.noise_cost() == pytest.approx((noise / scale) ** 2, rel=0.1)
+
+
+def test_a_stand_in_is_set_aside_and_the_verdict_leans_to_unexplained() -> None:
+    """A hypothesis that failed a physics check is never named; what replaces it is unsure."""
+    base = 1.0e-4  # held-out NRMSE 1 %: over UNEXPLAINED_NRMSE
+    strong = single("sensor_delay", base / 20)
+    clear = decide(summary(strong, base=base))
+    assert clear.effects == ("sensor_delay",) and clear.confidence > 0.9
+    failed = dataclasses.replace(
+        summary(strong, base=base), stand_ins={"sensor_delay": "delay_p_b differs between the segments"}
+    )
+    verdict = decide(failed)
+    assert verdict.effects == ("unexplained",) and verdict.chosen is None
+    assert verdict.confidence <= diagnosis._confidence(diagnosis.STAND_IN_MARGIN) + 1e-12
+    note = diagnosis.hypothesis_note(failed, ("sensor_delay",), verdict)
+    assert note.startswith("not named (physics check)")
+    # the next admissible hypothesis is named instead, no surer than the cap
+    other = dataclasses.replace(failed, singles=(strong, single("thermal_drift", base / 5)))
+    replaced = decide(other)
+    assert replaced.effects == ("thermal_drift",)
+    assert replaced.confidence <= diagnosis._confidence(diagnosis.STAND_IN_MARGIN) + 1e-12
+
+
+def test_pairs_that_can_never_be_named_charge_their_worst_case() -> None:
+    """A pair whose better single leaves under PAIR_SHARE is ruled out, not fitted; the
+    verdict is the same and its confidence no higher than with any fit of that pair."""
+    best = single("seal_stick_slip", BASE / 100)
+    ruled = dataclasses.replace(
+        summary(best, single("thermal_drift", BASE / 1.2)),
+        pairs_ruled_out=(("seal_stick_slip", "thermal_drift"),),
+    )
+    verdict = decide(ruled)
+    assert verdict.effects == ("seal_stick_slip",)
+    for pair_cost in (BASE / 100.5, BASE / 150, BASE / 1e4, 0.0 + 1e-30):
+        fitted = summary(
+            best, single("thermal_drift", BASE / 1.2),
+            pair("seal_stick_slip", "thermal_drift", pair_cost),
+        )
+        with_fit = decide(fitted)
+        assert with_fit.effects == verdict.effects
+        assert verdict.confidence <= with_fit.confidence + 1e-12
+    replayed = Summary.from_dict(json.loads(json.dumps(ruled.as_dict())))
+    assert decide(replayed) == verdict
+    stand = dataclasses.replace(ruled, stand_ins={"thermal_drift": "x"})
+    assert Summary.from_dict(json.loads(json.dumps(stand.as_dict()))) == stand

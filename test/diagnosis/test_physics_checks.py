@@ -1,0 +1,35 @@
+"""The physics checks a candidate must pass before it is named."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from brake_hil.diagnosis.fitting import Fit
+from brake_hil.diagnosis.physics_checks import channel_check
+
+
+def _fit(effects: tuple[str, ...], nrmse: dict[str, float]) -> Fit:
+    cost = float(np.mean([v**2 for v in nrmse.values()]))
+    return Fit(effects, np.zeros(1), ("a",), ("-",), cost, cost, nrmse)
+
+
+BASELINE = _fit((), {"p_b": 0.02, "F_k": 0.02, "x_c": 0.02})
+
+
+def test_an_effect_must_remove_error_where_its_physics_reaches() -> None:
+    # eccentric_load reaches x_c only: an improvement mostly on p_b is a stand-in
+    on_p_b = _fit(("eccentric_load",), {"p_b": 0.002, "F_k": 0.019, "x_c": 0.019})
+    outcome = channel_check(BASELINE, on_p_b)
+    assert not outcome.passed and "p_b" in outcome.finding and "x_c" in outcome.finding
+    on_x_c = _fit(("eccentric_load",), {"p_b": 0.019, "F_k": 0.019, "x_c": 0.002})
+    assert channel_check(BASELINE, on_x_c).passed
+
+
+def test_an_improvement_spread_over_channels_passes() -> None:
+    spread = _fit(("seal_stick_slip",), {"p_b": 0.012, "F_k": 0.012, "x_c": 0.012})
+    assert channel_check(BASELINE, spread).passed
+    # a pair reaches the union of its effects' channels
+    pair = _fit(
+        ("eccentric_load", "orifice_flow"), {"p_b": 0.002, "F_k": 0.019, "x_c": 0.019}
+    )
+    assert channel_check(BASELINE, pair).passed
