@@ -29,6 +29,7 @@ def generate_cases(
     jobs: int = 1,
     error_scale: float = 1.0,
     kinds: Sequence[str] = (),
+    family: str = "a",
     progress: Callable[[int, int], None] | None = None,
 ) -> Path:
     """Write ``count`` labelled cases under ``out``; return the path of ``labels.json``.
@@ -43,20 +44,23 @@ def generate_cases(
         error_scale: multiplies the one-sigma tolerances the parameter errors are drawn from.
         kinds: keep only cases of these kinds (null, single, pair, unexplained), numbered as
             in the full schedule; ``count`` is then the number kept.
+        family: the family of truth laws (``a``, the registered laws, or ``b``; see
+            :mod:`brake_hil.virtual_rig.cases`).
         progress: called with the number of cases written and the number in all: once
             before the first is simulated, then as each finishes (in the cases' order).
 
     Raises:
         FileExistsError: ``out`` holds files already.
+        EffectError: an unknown family (before anything is written).
         BrakeHilError: a case could not be simulated (the first such, after every case ran;
             no ``labels.json`` is written then).
     """
     out = Path(out)
     if out.exists() and any(out.iterdir()):
         raise FileExistsError(f"{out}: not empty; choose a new directory for the cases")
+    specs = select_cases(count, seed, kinds, error_scale=error_scale, family=family)
     cases_dir = out / "cases"
     cases_dir.mkdir(parents=True, exist_ok=True)
-    specs = select_cases(count, seed, kinds, error_scale=error_scale)
 
     written = 0
 
@@ -79,6 +83,7 @@ def generate_cases(
         pulsing_s=pulsing_s,
         error_scale=error_scale,
         kinds=kinds,
+        family=family,
     )
 
 
@@ -100,6 +105,7 @@ def run_cases(
     jobs: int = 1,
     error_scale: float = 1.0,
     kinds: Sequence[str] = (),
+    family: str = "a",
     progress: Callable[[int, int], None] | None = None,
 ) -> CasesResult:
     """``brake-hil cases``: check the options, then :func:`generate_cases`.
@@ -112,6 +118,7 @@ def run_cases(
         jobs: worker processes (at least 1).
         error_scale: multiplies the one-sigma tolerances of the parameter errors.
         kinds: keep only cases of these kinds (empty: every kind).
+        family: the family of truth laws, ``a`` or ``b``.
         progress: called with the cases written and the cases in all (see
             :func:`generate_cases`).
 
@@ -133,6 +140,7 @@ def run_cases(
         jobs=jobs,
         error_scale=error_scale,
         kinds=kinds,
+        family=family,
         progress=progress,
     )
     return CasesResult(count, out / "cases", labels)

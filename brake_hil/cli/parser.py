@@ -174,6 +174,13 @@ def _add_cases_parser(commands: argparse._SubParsersAction) -> None:  # type: ig
         default=[],
         help="keep only cases of this kind (repeatable; default: every kind)",
     )
+    cases.add_argument(
+        "--family",
+        choices=("a", "b"),
+        default="a",
+        help="family of truth laws: a (the registered laws, default) or b (a second, "
+        "structurally different law per effect and its own measurement chain)",
+    )
 
 
 def uses_virtual_rig(args: argparse.Namespace) -> bool:

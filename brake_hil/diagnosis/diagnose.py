@@ -32,6 +32,11 @@ from brake_hil.diagnosis.evidence import Evidence, collect
 from brake_hil.diagnosis.fitting import Fit, Model, fit
 from brake_hil.diagnosis.improved_model import ImprovedModel
 from brake_hil.diagnosis.physics_checks import CheckOutcome, check_hypothesis
+from brake_hil.diagnosis.residual_forms import (
+    ResidualDescription,
+    baseline_predictions,
+    describe_residual,
+)
 from brake_hil.errors import BrakeHilError, FitError
 from brake_hil.physics.rig import Rig
 from brake_hil.topics import OUTPUT_CHANNELS
@@ -89,6 +94,7 @@ class Diagnosis:
     summary: Summary
     unfitted: tuple[str, ...] = ()  # hypotheses left out: not finite where their fit starts
     checks: dict[str, list[CheckOutcome]] = field(default_factory=dict)  # physics checks run
+    residual: ResidualDescription | None = None  # what an unexplained misfit looks like
 
     def improved_model(self, rig_path: Path) -> ImprovedModel:
         """The improved model in the form the caliper-model node loads."""
@@ -118,7 +124,13 @@ class Diagnosis:
                 "effects": list(self.effects),
                 "confidence": round(self.confidence, 3),
                 "explanation": self.explanation,
+                **(
+                    {"unexplained_form": self.residual.verdict_entry()}
+                    if self.residual is not None and self.effects == ("unexplained",)
+                    else {}
+                ),
             },
+            **({"residual": self.residual.as_dict()} if self.residual is not None else {}),
             "mismatch": {
                 "channels": self.evidence.channels,
                 "windows": [list(w) for w in self.evidence.windows],
@@ -228,6 +240,12 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         summary = summarise(baseline, singles, pairs, dataset.noise_cost(), evidence)
         verdict = decide(summary)
     hypotheses = singles + pairs
+    say("describing the misfit by generic forms")
+    residual = describe_residual(
+        dataset,
+        baseline_predictions(baseline_model, baseline.theta),
+        noise_cost=dataset.noise_cost(),
+    )
     checks: dict[str, list[CheckOutcome]] = {}
     for _ in range(CHECK_ROUNDS):
         named = next((h for h in hypotheses if h.effects == verdict.chosen), None)
@@ -236,7 +254,7 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         key = "+".join(named.effects)
         say(f"checking the physics of {key}")
         checks[key] = check_hypothesis(
-            calibration, dataset, baseline, named, required_ratio(summary)
+            calibration, dataset, baseline, named, required_ratio(summary), residual
         )
         failed = next((c for c in checks[key] if not c.passed), None)
         if failed is None:
@@ -276,6 +294,8 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         explanation = _explain(baseline, chosen, evidence, baseline_metrics, improved_metrics)
     for effects, finding in summary.stand_ins.items():
         explanation += f" Set aside, {effects.replace('+', ' and ')}: {finding}."
+    if verdict.effects == ("unexplained",):
+        explanation += f" {residual.summary[0].upper()}{residual.summary[1:]}."
     return Diagnosis(
         recording=str(recording.path),
         effects=verdict.effects,
@@ -292,6 +312,7 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         summary=summary,
         unfitted=tuple(unfitted),
         checks=checks,
+        residual=residual,
     )
 
 
@@ -474,6 +495,7 @@ class Verdict:
     effects: tuple[str, ...]  # () none, ("unexplained",), or candidate names
     confidence: float
     chosen: tuple[str, ...] | None  # effects of the hypothesis kept as improved model
+    margin: float = math.inf  # the smallest decision margin (log units) the confidence is of
 
 
 def ratio(reference: float, cost: float) -> float:
@@ -595,7 +617,7 @@ def decide(summary: Summary) -> Verdict:
 
     if summary.excess_ratio < NOISE_EXCESS:
         margin = math.log(NOISE_EXCESS / max(summary.excess_ratio, 1e-9))
-        return Verdict((), _confidence(margin), None)
+        return Verdict((), _confidence(margin), None, margin)
     required = required_ratio(summary)
     ranked = sorted((*summary.singles, *summary.pairs), key=score, reverse=True)
     eligible = [h for h in ranked if admissible(h)]
@@ -631,14 +653,15 @@ def decide(summary: Summary) -> Verdict:
         else:  # how far the pair clears its better single
             alone = max(log_gains.get((e,), 0.0) for e in chosen.effects)
             margins.append(own - alone - math.log(PAIR_RATIO))
-        return Verdict(chosen.effects, _confidence(min(margins + cap)), chosen.effects)
+        least = min(margins + cap)
+        return Verdict(chosen.effects, _confidence(least), chosen.effects, least)
     unexplained = summary.baseline_nrmse > UNEXPLAINED_NRMSE
     margin = min(
         math.log(required) - best,
         abs(math.log(max(summary.baseline_nrmse, 1e-12) / UNEXPLAINED_NRMSE)),
         *cap,
     )
-    return Verdict(("unexplained",) if unexplained else (), _confidence(margin), None)
+    return Verdict(("unexplained",) if unexplained else (), _confidence(margin), None, margin)
 
 
 def required_ratio(summary: Summary) -> float:

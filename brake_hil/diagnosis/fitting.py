@@ -21,7 +21,7 @@ from brake_hil.diagnosis.dataset import Dataset, Window
 from brake_hil.diagnosis.engine import ModelSpec, simulate_batch
 from brake_hil.errors import FitError
 from brake_hil.topics import OUTPUT_CHANNELS
-from brake_hil.types import FloatArray, IndexArray
+from brake_hil.types import BoolArray, FloatArray, IndexArray
 
 PREROLL = 0.8
 """Seconds simulated before a window (s)."""
@@ -139,9 +139,11 @@ class Model:
             column += size
         return draft.spec()
 
-    def _span(self, window: Window, span: float | None) -> tuple[int, int, IndexArray]:
-        """First and end sample simulated for ``window`` (from ``PREROLL`` before it), and
-        the mask of the samples inside it."""
+    def _span(self, window: Window, span: float | None) -> tuple[int, int, BoolArray]:
+        """First and end sample simulated for ``window``, and the mask of those inside it.
+
+        The simulation starts ``PREROLL`` seconds before the window.
+        """
         ds = self.dataset
         end = window.end if span is None else min(window.end, window.start + span)
         first = int(np.searchsorted(ds.time, window.start - PREROLL))

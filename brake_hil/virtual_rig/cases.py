@@ -14,10 +14,19 @@ written apart from them (:func:`write_labels`: ``DIR/labels.json``, which a diag
 * ``unexplained``: physics outside the diagnosis's library (``OUT_OF_LIBRARY``: a transducer
   gain that changes with its reading), subtle or strong, labelled ``["unexplained"]``.
 
+Two families of truth laws make the cases: ``a`` (the default) draws each effect's law from
+:data:`~brake_hil.virtual_rig.effects.EFFECTS` and its out-of-library cases from
+``OUT_OF_LIBRARY``; ``b`` draws the structurally different laws of
+:data:`~brake_hil.virtual_rig.family_b.EFFECTS_B` (the same effects, so the same labels) and
+the out-of-library effects of :data:`~brake_hil.virtual_rig.family_b.OUTSIDE_B`, from
+streams of its own, and acquires every case through its own measurement chain
+(:class:`~brake_hil.virtual_rig.family_b.MeasurementChainB`, not an effect). A diagnosis
+tuned on one family is judged on the other.
+
 :func:`plan_cases` fixes the schedule so that the first cases already cover every kind: null
 cases, every effect both subtle and strong, and pairs. Every draw comes from
 ``numpy.random.default_rng([seed, case number])``, so a case does not depend on how many
-others are generated or in which process.
+others are generated or in which process (family b: ``default_rng([seed, case number, 2])``).
 
 Parameter errors: each value of ``PERTURBED_KEYS`` is multiplied by ``1 + e``, ``e`` drawn
 from a normal distribution of standard deviation ``error_scale / 2`` times the key's
@@ -39,8 +48,21 @@ from brake_hil import __version__
 from brake_hil.physics.excitation import SEED_MAX_PRESSURES
 from brake_hil.physics.rig import Rig, rig_from_mapping
 from brake_hil.virtual_rig.bag import write_run
-from brake_hil.virtual_rig.effects import EFFECTS, OUT_OF_LIBRARY, Effect, effect_class
+from brake_hil.virtual_rig.effects import (
+    EFFECTS,
+    OUT_OF_LIBRARY,
+    Effect,
+    EffectError,
+    effect_class,
+)
 from brake_hil.virtual_rig.excitation import Excitation, seed_pulsing, solenoid_pulsing
+from brake_hil.virtual_rig.family_b import (
+    EFFECTS_B,
+    FAMILY_B,
+    MeasurementChainB,
+    is_family_b_law,
+    outside_names,
+)
 from brake_hil.virtual_rig.rig_yaml import rig_to_mapping, rig_with_values, write_rig
 from brake_hil.virtual_rig.simulator import simulate_rig
 
@@ -61,6 +83,11 @@ PERTURBED_KEYS = (
 )
 """Rig values that differ between nominal and truth (the catalogue-grade ones; geometry is
 taken as measured)."""
+
+FAMILIES = ("a", FAMILY_B)
+"""The families of truth laws a case can be made of (``a``: the registered laws)."""
+_FAMILY_STREAM = {"a": (), FAMILY_B: (2,)}
+"""What each family appends to a case's seed sequence (family a's draws are the original)."""
 
 SUBTLE_STRENGTHS = (0.15, 0.35)
 STRONG_STRENGTHS = (0.7, 1.0)
@@ -128,6 +155,7 @@ class CaseSpec:
     parameter_errors: dict[str, float] = field(default_factory=dict)  # truth / nominal - 1
     air_driven: bool = False
     noise_seed: int = 0
+    family: str = "a"  # the family of truth laws (FAMILIES)
 
     @property
     def case_id(self) -> str:
@@ -135,15 +163,35 @@ class CaseSpec:
         return f"{self.number:03d}"
 
 
-def _schedule(count: int, seed: int) -> Iterator[tuple[str, tuple[str, ...], tuple[str, ...]]]:
+def _check_family(family: str) -> None:
+    if family not in FAMILIES:
+        raise EffectError(
+            f"unknown family of truth laws {family!r} (known: {', '.join(FAMILIES)})"
+        )
+
+
+def _library(family: str) -> tuple[list[str], list[str]]:
+    """The family's library effects and out-of-library effects, by name.
+
+    Family a's out-of-library effects leave out family b's (registered once family b is used).
+    """
+    if family == FAMILY_B:
+        return list(EFFECTS_B), list(outside_names())
+    outside = [name for name, cls in OUT_OF_LIBRARY.items() if not is_family_b_law(cls)]
+    return list(EFFECTS), outside
+
+
+def _schedule(
+    count: int, seed: int, family: str = "a"
+) -> Iterator[tuple[str, tuple[str, ...], tuple[str, ...]]]:
     """(kind, effect names, strength classes) for each case, covering every kind early.
 
     Per round of ``2 * E + 2 + 4 + 2`` cases (``E`` effects): two null cases, each effect
     once subtle and once strong (subtle first for half of them), four pairs, and one subtle
     and one strong out-of-library case.
     """
-    names = list(EFFECTS)
-    rng = np.random.default_rng([seed, 1_000_003])
+    names, outside = _library(family)
+    rng = np.random.default_rng([seed, 1_000_003, *_FAMILY_STREAM[family]])
     produced = 0
     while produced < count:
         order = [names[i] for i in rng.permutation(len(names))]
@@ -160,7 +208,6 @@ def _schedule(count: int, seed: int) -> Iterator[tuple[str, tuple[str, ...], tup
             pairs.append(("pair", (names[int(a)], names[int(b)]), classes))
         round_ = [("null", (), ()), *first, pairs[0], pairs[1], ("null", (), ()), *second]
         round_ += pairs[2:]
-        outside = list(OUT_OF_LIBRARY)
         round_ += [
             ("unexplained", (outside[int(rng.integers(len(outside)))],), (c,))
             for c in ("subtle", "strong")
@@ -172,10 +219,17 @@ def _schedule(count: int, seed: int) -> Iterator[tuple[str, tuple[str, ...], tup
             yield item
 
 
-def _draw_effect(name: str, strength_class: str, rng: np.random.Generator) -> Effect:
-    """The effect ``name`` at a strength of its class, its case parameters drawn by itself."""
+def _draw_effect(
+    name: str, strength_class: str, rng: np.random.Generator, family: str = "a"
+) -> Effect:
+    """The effect ``name`` of ``family`` at a strength of its class, drawing its own parameters.
+
+    Family b's library effects are its own laws; out-of-library effects come from the registry.
+    """
     low, high = SUBTLE_STRENGTHS if strength_class == "subtle" else STRONG_STRENGTHS
     strength = float(np.round(rng.uniform(low, high), 3))
+    if family == FAMILY_B and name in EFFECTS_B:
+        return EFFECTS_B[name].draw(rng, strength)
     return effect_class(name).draw(rng, strength)
 
 
@@ -209,14 +263,20 @@ def plan_cases(
     nominal_keys: Sequence[str] = ("one_washer_open", "one_washer_restricted", "five_washer_open"),
     error_scale: float = 1.0,
     air_driven_share: float = 0.25,
+    family: str = "a",
 ) -> list[CaseSpec]:
-    """The labelled cases, before simulation (see the module docstring)."""
+    """The labelled cases of ``family``'s truth laws, before simulation (see the module docstring).
+
+    Raises:
+        EffectError: an unknown family.
+    """
+    _check_family(family)
     rigs = nominal_rigs()
     specs = []
-    for number, (kind, names, classes) in enumerate(_schedule(count, seed)):
-        rng = np.random.default_rng([seed, number])
+    for number, (kind, names, classes) in enumerate(_schedule(count, seed, family)):
+        rng = np.random.default_rng([seed, number, *_FAMILY_STREAM[family]])
         nominal_key = str(rng.choice(list(nominal_keys)))
-        effects = tuple(_draw_effect(n, c, rng) for n, c in zip(names, classes))
+        effects = tuple(_draw_effect(n, c, rng, family) for n, c in zip(names, classes))
         strength_class = "none" if not classes else classes[0]
         if len(set(classes)) > 1:
             strength_class = "mixed"
@@ -230,25 +290,34 @@ def plan_cases(
                 parameter_errors=draw_parameter_errors(rigs[nominal_key], rng, error_scale),
                 air_driven=bool(rng.uniform() < air_driven_share),
                 noise_seed=int(rng.integers(0, 2**31 - 1)),
+                family=family,
             )
         )
     return specs
 
 
 def select_cases(
-    count: int, seed: int, kinds: Sequence[str] = (), *, error_scale: float = 1.0
+    count: int,
+    seed: int,
+    kinds: Sequence[str] = (),
+    *,
+    error_scale: float = 1.0,
+    family: str = "a",
 ) -> list[CaseSpec]:
     """The first ``count`` cases of the schedule whose kind is one of ``kinds`` (all: empty).
 
-    A kept case is the very case of that number in the full schedule.
+    A kept case is the very case of that number in ``family``'s full schedule.
+
+    Raises:
+        EffectError: an unknown family.
     """
     planned = count
-    specs = plan_cases(planned, seed, error_scale=error_scale)
+    specs = plan_cases(planned, seed, error_scale=error_scale, family=family)
     if not kinds:
         return specs
     while sum(spec.kind in kinds for spec in specs) < count:
         planned *= 2
-        specs = plan_cases(planned, seed, error_scale=error_scale)
+        specs = plan_cases(planned, seed, error_scale=error_scale, family=family)
     return [spec for spec in specs if spec.kind in kinds][:count]
 
 
@@ -261,9 +330,20 @@ def case_excitation(spec: CaseSpec, truth: Rig, pulsing_s: float) -> Excitation:
     return seed_pulsing(SEED_MAX_PRESSURES, pulsing_s=pulsing_s, pulsing_hz=truth.excitation_hz)
 
 
+def measurement_chain(spec: CaseSpec) -> tuple[Effect, ...]:
+    """The case's measurement chain beyond the seed's DAQ: family b's, none for family a.
+
+    Installed after the effects (their laws act first on a channel), never labelled as one.
+    """
+    if spec.family == FAMILY_B:
+        return (MeasurementChainB(seed=spec.noise_seed),)
+    return ()
+
+
 def label(spec: CaseSpec, truth: Rig, excitation: Excitation) -> dict[str, Any]:
     """The JSON label of one case."""
-    return {
+    result = {
+        "family": spec.family,
         "kind": spec.kind,
         "strength_class": spec.strength_class,
         "expected_effects": (
@@ -279,6 +359,9 @@ def label(spec: CaseSpec, truth: Rig, excitation: Excitation) -> dict[str, Any]:
         "air_driven": spec.air_driven,
         "noise_seed": spec.noise_seed,
     }
+    if chain := measurement_chain(spec):
+        result["measurement_chain"] = [{"name": c.name, "parameters": c.values()} for c in chain]
+    return result
 
 
 def make_case(spec: CaseSpec, cases_dir: Path, pulsing_s: float) -> dict[str, Any]:
@@ -286,7 +369,8 @@ def make_case(spec: CaseSpec, cases_dir: Path, pulsing_s: float) -> dict[str, An
     nominal = nominal_rigs()[spec.nominal_key]
     truth = truth_rig(nominal, spec.parameter_errors, f"truth of case {spec.case_id}")
     excitation = case_excitation(spec, truth, pulsing_s)
-    run = simulate_rig(truth, spec.effects, excitation, seed=spec.noise_seed)
+    effects = (*spec.effects, *measurement_chain(spec))
+    run = simulate_rig(truth, effects, excitation, seed=spec.noise_seed)
     folder = cases_dir / spec.case_id
     folder.mkdir(parents=True, exist_ok=False)
     write_run(run, folder / "recording")
@@ -305,6 +389,7 @@ def write_labels(
     pulsing_s: float,
     error_scale: float,
     kinds: Sequence[str],
+    family: str = "a",
 ) -> Path:
     """Write ``out/labels.json``: how the cases were made and each case's label.
 
@@ -316,6 +401,7 @@ def write_labels(
         pulsing_s: seconds of 5 Hz pulsing per maximum pressure.
         error_scale: the parameter errors' scale of the rig tolerances.
         kinds: the kinds kept (empty: every kind).
+        family: the family of truth laws the cases were made of.
 
     Returns:
         The path of ``labels.json``.
@@ -328,6 +414,7 @@ def write_labels(
             "pulsing_s": pulsing_s,
             "error_scale": error_scale,
             "kinds": list(kinds),
+            "family": family,
             "layout": "cases/NNN/recording (rosbag2 MCAP) + cases/NNN/rig.yaml (nominal)",
         },
         "cases": dict(sorted(labels.items())),

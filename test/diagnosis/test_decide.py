@@ -133,7 +133,8 @@ def test_a_stand_in_is_set_aside_and_the_verdict_leans_to_unexplained() -> None:
     clear = decide(summary(strong, base=base))
     assert clear.effects == ("sensor_delay",) and clear.confidence > 0.9
     failed = dataclasses.replace(
-        summary(strong, base=base), stand_ins={"sensor_delay": "delay_p_b differs between the segments"}
+        summary(strong, base=base),
+        stand_ins={"sensor_delay": "delay_p_b differs between the segments"},
     )
     verdict = decide(failed)
     assert verdict.effects == ("unexplained",) and verdict.chosen is None

@@ -205,7 +205,7 @@ class Integrator:
 
     def outputs(self) -> FloatArray:
         """Current outputs (B, 3): p_b (Pa), F_k (N), x_c (m)."""
-        return np.matmul(self.out_c, self.z[:, :, None])[:, :, 0]
+        return np.asarray(np.matmul(self.out_c, self.z[:, :, None])[:, :, 0], dtype=float)
 
     def advance(
         self, previous_pressure: float | FloatArray, pressure: float | FloatArray
@@ -218,7 +218,7 @@ class Integrator:
         block: IndexArray | int = 0
         if self.on_time:
             now = self.start_time + self.step_index * self.sample_time
-            if np.ndim(now):
+            if isinstance(now, np.ndarray):
                 block = np.minimum((now / self.block_s).astype(np.intp), self.blocks - 1)
             else:
                 block = min(int(now / self.block_s), self.blocks - 1)

@@ -1,0 +1,109 @@
+"""Family b: a second, structurally different truth law for every effect of the library.
+
+Family a (:mod:`brake_hil.virtual_rig.effects`) has one truth law per effect of the catalogue
+(:mod:`brake_hil.physics.catalogue`); family b realises the same physics with other laws (a
+Bouc-Wen seal instead of LuGre, a Churchill-Usagi valve instead of an orifice with ``C_d(Re)``,
+a creeping hose node instead of an RC ladder ...) and acquires its cases through its own
+measurement chain (:mod:`~brake_hil.virtual_rig.family_b.daq`), so a diagnosis tuned on one
+family's recordings can be judged on the other's. ``EFFECTS_B`` maps each library name to its
+family-b law, in the catalogue's order; its labels name the same effects as family a's.
+``OUTSIDE_B`` names the out-of-library effects family b draws for ``unexplained`` cases: those
+of :mod:`brake_hil.virtual_rig.family_b.outside` (``OUTSIDE_NAMES``, registered with
+:func:`brake_hil.virtual_rig.effects.register_effect` when imported) when that module is
+there, else family a's transducer gain; it is looked up on first use.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from functools import cache
+import importlib
+
+from brake_hil.physics import catalogue
+from brake_hil.virtual_rig.effects.base import Effect
+from brake_hil.virtual_rig.family_b.base import FAMILY_B, FamilyBEffect
+from brake_hil.virtual_rig.family_b.bore_friction import BoreFrictionB
+from brake_hil.virtual_rig.family_b.daq import DAQ_B, MeasurementChainB
+from brake_hil.virtual_rig.family_b.eccentric_load import EccentricLoadB
+from brake_hil.virtual_rig.family_b.entrained_air import EntrainedAirB
+from brake_hil.virtual_rig.family_b.hose_compliance import HoseComplianceB
+from brake_hil.virtual_rig.family_b.orifice_flow import OrificeFlowB
+from brake_hil.virtual_rig.family_b.seal_groove_asymmetry import SealGrooveAsymmetryB
+from brake_hil.virtual_rig.family_b.seal_stick_slip import SealStickSlipB
+from brake_hil.virtual_rig.family_b.sensor_delay import SensorDelayB
+from brake_hil.virtual_rig.family_b.thermal_drift import ThermalDriftB
+
+__all__ = [
+    "DAQ_B",
+    "EFFECTS_B",
+    "FAMILY_B",
+    "OUTSIDE_B",
+    "BoreFrictionB",
+    "EccentricLoadB",
+    "EntrainedAirB",
+    "FamilyBEffect",
+    "HoseComplianceB",
+    "MeasurementChainB",
+    "OrificeFlowB",
+    "SealGrooveAsymmetryB",
+    "SealStickSlipB",
+    "SensorDelayB",
+    "ThermalDriftB",
+    "is_family_b_law",
+    "outside_names",
+]
+
+_LAWS: tuple[type[FamilyBEffect], ...] = (
+    SealStickSlipB,
+    SealGrooveAsymmetryB,
+    EntrainedAirB,
+    OrificeFlowB,
+    HoseComplianceB,
+    BoreFrictionB,
+    EccentricLoadB,
+    ThermalDriftB,
+    SensorDelayB,
+)
+
+EFFECTS_B: Mapping[str, type[Effect]] = {
+    name: law for name in catalogue.CATALOGUE for law in _LAWS if law.name == name
+}
+"""Family b's law of every library effect by its name, in the catalogue's order."""
+
+_OUTSIDE_MODULE = "brake_hil.virtual_rig.family_b.outside"
+_OUTSIDE_FALLBACK = ("sensor_nonlinearity",)
+
+OUTSIDE_B: tuple[str, ...]
+"""Out-of-library effects family b draws for ``unexplained`` cases (see the module docstring)."""
+
+
+@cache
+def outside_names() -> tuple[str, ...]:
+    """``OUTSIDE_NAMES`` of the family-b out-of-library module, or family a's when it is absent.
+
+    Importing the module registers its truth laws
+    (:func:`brake_hil.virtual_rig.effects.effect_class` finds them).
+    """
+    try:
+        module = importlib.import_module(_OUTSIDE_MODULE)
+    except ModuleNotFoundError as error:
+        if error.name != _OUTSIDE_MODULE:
+            raise
+        return _OUTSIDE_FALLBACK
+    names = getattr(module, "OUTSIDE_NAMES", None)
+    return tuple(str(name) for name in names) if names else _OUTSIDE_FALLBACK
+
+
+def is_family_b_law(cls: type[Effect]) -> bool:
+    """True when the truth law ``cls`` is family b's (its module is in this package).
+
+    Family b's out-of-library laws are registered alongside family a's; family a leaves them
+    out, so its cases stay what they were.
+    """
+    return cls.__module__.startswith(__name__ + ".")
+
+
+def __getattr__(name: str) -> tuple[str, ...]:
+    if name == "OUTSIDE_B":
+        return outside_names()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
