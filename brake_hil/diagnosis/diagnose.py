@@ -292,8 +292,13 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
             )
     else:
         explanation = _explain(baseline, chosen, evidence, baseline_metrics, improved_metrics)
-    for effects, finding in summary.stand_ins.items():
-        explanation += f" Set aside, {effects.replace('+', ' and ')}: {finding}."
+    if summary.stand_ins:
+        first, finding = next(iter(summary.stand_ins.items()))
+        others = [e.replace("+", " + ") for e in list(summary.stand_ins)[1:]]
+        also = f"; also {', '.join(others)} (the report's physics checks)" if others else ""
+        explanation += (
+            f" Set aside by a physics check, {first.replace('+', ' and ')}: {finding}{also}."
+        )
     if verdict.effects == ("unexplained",):
         explanation += f" {residual.summary[0].upper()}{residual.summary[1:]}."
     return Diagnosis(

@@ -106,7 +106,8 @@ def form_check(
         "generic_form",
         False,
         f"a generic form, {form.description}, cuts the error {form.improvement:.1f} times where "
-        f"{' and '.join(hypothesis.effects)} cuts it {gain:.1f} times",
+        f"{' and '.join(hypothesis.effects)} {'cut' if len(hypothesis.effects) > 1 else 'cuts'} "
+        f"it {gain:.1f} times",
     )
 
 

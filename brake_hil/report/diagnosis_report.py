@@ -501,6 +501,44 @@ def _calibration_table(diagnosis: Diagnosis, flagged: list[Finding]) -> str:
     )
 
 
+def _checks_table(diagnosis: Diagnosis) -> str:
+    """The physics checks run on the verdicts considered, one row per check."""
+    if not diagnosis.checks:
+        return "<p>No hypothesis reached the checks (none cut the error enough).</p>"
+    rows = "".join(
+        f"<tr><td>{html.escape(effects.replace('+', ' + '))}</td>"
+        f"<td>{html.escape(outcome.name.replace('_', ' '))}</td>"
+        f"<td>{'passed' if outcome.passed else '<b>failed: set aside</b>'}</td>"
+        f"<td>{_text(outcome.finding)}</td></tr>"
+        for effects, outcomes in diagnosis.checks.items()
+        for outcome in outcomes
+    )
+    return (
+        "<p>Before a hypothesis is named it must behave as its physics: no generic form "
+        "explains the misfit far better, the error it removes is on channels its physics "
+        "reaches, its parameters agree segment by segment, and it survives wider priors on "
+        "the rig's values.</p><table><tr><th>hypothesis</th><th>check</th><th>result</th>"
+        "<th>what was found</th></tr>" + rows + "</table>"
+    )
+
+
+def _forms_table(diagnosis: Diagnosis) -> str:
+    """The generic forms fitted to the baseline's residual, best first."""
+    residual = diagnosis.residual
+    if residual is None:
+        return ""
+    rows = "".join(
+        f"<tr><td>{html.escape(form.form.replace('_', ' '))}</td><td>{form.channel}</td>"
+        f"<td>{form.improvement:.2f}</td><td>{_text(form.description)}</td></tr>"
+        for form in residual.forms[:6]
+    )
+    return (
+        "<h2>What the misfit looks like (generic forms on the baseline's residual)</h2>"
+        f"<p>{_text(residual.summary)}</p><table><tr><th>form</th><th>channel</th>"
+        "<th>held-out error cut (x)</th><th>fitted</th></tr>" + rows + "</table>"
+    )
+
+
 def _html(diagnosis: Diagnosis, figures: list[str], rig_path: Path | None) -> str:
     verdict = ", ".join(diagnosis.effects) or "no missing physics"
     findings = calibration_findings(diagnosis)
@@ -533,5 +571,7 @@ p.why{{background:#fff6e0;padding:6px}}ul.summary li{{margin:4px 0}}
 <h2>Calibration: is the rig file right?</h2>{_calibration_table(diagnosis, findings)}
 <h2>Hypotheses (held-out mean squared error, baseline over hypothesis)</h2>
 {_hypotheses_table(diagnosis)}
+<h2>Physics checks</h2>{_checks_table(diagnosis)}
+{_forms_table(diagnosis)}
 </body></html>
 """
