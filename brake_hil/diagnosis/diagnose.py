@@ -31,7 +31,7 @@ from brake_hil.diagnosis.dataset import Dataset, prepare
 from brake_hil.diagnosis.evidence import Evidence, collect
 from brake_hil.diagnosis.fitting import Fit, Model, fit
 from brake_hil.diagnosis.improved_model import ImprovedModel
-from brake_hil.diagnosis.physics_checks import CheckOutcome, check_hypothesis
+from brake_hil.diagnosis.physics_checks import CheckOutcome, check_hypothesis, unidentified
 from brake_hil.diagnosis.residual_forms import (
     ResidualDescription,
     baseline_predictions,
@@ -157,6 +157,7 @@ class Diagnosis:
                 "prior_sigma": self.calibration.sigmas,
                 "posterior_sigma": self.calibration.uncertainty,
                 "prior_z": self.calibration.prior_z(),
+                "not_identified": list(unidentified(self.calibration)),
             },
             "baseline": {"metrics": self.baseline_metrics},
             "improved": {
