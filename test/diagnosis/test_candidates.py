@@ -161,18 +161,3 @@ def test_unregistered_candidates_leave_the_diagnosis() -> None:
     assert "pressure_thickening" not in names
     with pytest.raises(EffectError):
         candidate("pressure_thickening")
-
-
-def test_a_sensor_delay_is_one_channel_late_and_the_two_others_agree() -> None:
-    """One skewed channel leaves the other two on time together; p_i late moves all alike.
-
-    Delays as fitted on recordings (s): real skews of one channel and of p_i pass; a load
-    cell's hysteresis fitted as delays (the two on-time channels 0.5-2.3 ms apart) does not.
-    """
-    delay = candidate("sensor_delay")
-    assert delay.plausible(np.array([-0.07e-3, 1.03e-3, -0.07e-3]))  # F_k late
-    assert delay.plausible(np.array([-0.02e-3, 0.06e-3, 1.13e-3]))  # x_c late
-    assert delay.plausible(np.array([-2.50e-3, -2.47e-3, -2.48e-3]))  # p_i late
-    assert not delay.plausible(np.array([0.51e-3, -0.60e-3, -1.14e-3]))  # hysteresis
-    assert not delay.plausible(np.array([2.27e-3, -1.05e-3, -3.34e-3]))
-    assert not delay.plausible(np.array([0.2e-3, 0.2e-3, 0.3e-3]))  # a common lag

@@ -16,8 +16,6 @@ from brake_hil.types import FloatArray
 
 SKEW_THRESHOLD = 0.5e-3
 """Delay difference (s) that counts as acquisition skew."""
-SKEW_AGREEMENT = 0.3e-3
-"""Largest difference (s) between the delays of the two channels a skew leaves on time."""
 
 
 class SensorDelay(Candidate):
@@ -40,25 +38,14 @@ class SensorDelay(Candidate):
         draft.add(ChannelDelay(theta[:, :3].copy()))
 
     def plausible(self, theta: FloatArray) -> bool:
-        """Skew of one channel: one output lags the two others, which agree; or all lead alike.
+        """Skew: one output lags the others by over 0.5 ms, or every output leads alike.
 
         Every output leading alike is the input ``p_i`` acquired late. A common lag of every
-        output is the model's own phase error, not acquisition skew. One late channel leaves
-        the other two on time together: two outputs whose fitted delays differ by more than
-        ``SKEW_AGREEMENT`` are not one acquisition skew (a load cell's hysteresis or a line's
-        dynamics fitted as delays gave -0.6 and -1.1 ms, -1.0 and -3.3 ms; real skews left the
-        other two within 0.1 ms of each other).
+        output is the model's own phase error, not acquisition skew.
         """
         delays = np.asarray(theta[:3], dtype=float)
-        deviation = np.abs(delays - np.median(delays))
-        odd = int(np.argmax(deviation))
-        others = np.delete(delays, odd)
-        agree = float(np.ptp(others)) <= SKEW_AGREEMENT
-        if float(np.max(delays)) < -SKEW_THRESHOLD:  # p_i acquired late: every output leads
-            return float(np.ptp(delays)) <= SKEW_AGREEMENT or (
-                agree and float(deviation[odd]) > SKEW_THRESHOLD
-            )
-        return float(deviation[odd]) > SKEW_THRESHOLD and agree
+        spread = float(np.max(np.abs(delays - np.median(delays))))
+        return spread > SKEW_THRESHOLD or float(np.max(delays)) < -SKEW_THRESHOLD
 
     def consistent(self, evidence: dict[str, float]) -> bool:
         """A channel lags by more than a millisecond."""
