@@ -15,16 +15,28 @@ Variants:
   and the model's loops spinning the last 150 us before each deadline.
 * ``after``: the project's loopback profile (one UDPv4 transport on 127.0.0.1) and the loops
   sleeping to their deadlines (``spin_margin_us`` 0).
+* ``one_process``: as ``after``, the four nodes in one process
+  (``python -m brake_hil.nodes.container``: one rclpy context, one DDS participant, Fast DDS
+  delivering inside the process). The process's CPU is the total; per node, the CPU of each
+  node's own threads (``/proc/PID/task``: the container names them ``model-loop``,
+  ``comparator-loop``, ``source-worker``, ``source-executor``, ``recorder-exec``); the rest
+  (the middleware's threads, the main thread) is ``shared``.
+
+``--variants`` picks which (default ``before,after``); ``--one-process`` is
+``--variants after,one_process``. Each line also gives the model's timing (its statistics
+file: period error p99, input arrival -> prediction published p99).
 
 Run from the checkout::
 
     .venv/bin/python benchmarks/bench_cpu.py --seconds 60 --rounds 1
+    .venv/bin/python benchmarks/bench_cpu.py --seconds 60 --rounds 1 --one-process
 """
 
 from __future__ import annotations
 
 import argparse
 from collections.abc import Mapping
+import json
 import os
 from pathlib import Path
 import shutil
@@ -36,8 +48,9 @@ PROJECT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(PROJECT))
 
 from brake_hil.app.chain import (  # noqa: E402
-    NodeProcess,
+    CONTAINER_STOP_S,
     ros_environment,
+    start_container,
     start_node,
     stop_node,
 )
@@ -51,7 +64,54 @@ NODES = ("pressure_source", "caliper_model", "comparator", "recorder")
 VARIANTS: dict[str, dict[str, Any]] = {
     "before": {"env": {"BRAKE_HIL_DDS_PROFILE": "off"}, "loops": {"spin_margin_us": 150}},
     "after": {"env": {}, "loops": {"spin_margin_us": 0}},
+    "one_process": {"env": {}, "loops": {"spin_margin_us": 0}, "one_process": True},
 }
+THREADS = {
+    "source-worker": "pressure_source",
+    "source-executor": "pressure_source",
+    "model-loop": "caliper_model",
+    "comparator-loop": "comparator",
+    "recorder-exec": "recorder",
+}
+"""The container's thread names (``/proc/PID/task/*/comm``) and their nodes."""
+
+
+def per_node(threads: Mapping[str, float]) -> dict[str, float]:
+    """Thread figures grouped by node (:data:`THREADS`), the rest as ``shared``."""
+    grouped = dict.fromkeys((*NODES, "shared"), 0.0)
+    for comm, value in threads.items():
+        grouped[THREADS.get(comm, "shared")] += value
+    return grouped
+
+
+def _plan(out: Path, loops: Mapping[str, Any]) -> list[tuple[str, dict[str, Any]]]:
+    """The nodes in start order (readers first) with their parameters."""
+    return [
+        ("recorder", {"output_dir": str(out), "bag_name": "bag"}),
+        ("comparator", {}),
+        (
+            "caliper_model",
+            {
+                "model_file": str(MODEL),
+                "mean_pressure": 1.55e6,
+                "statistics_file": str(out / "caliper_model.json"),
+                "wait_for_subscribers": 2,
+                **loops,
+            },
+        ),
+        (
+            "pressure_source",
+            {
+                "recording": str(RECORDING),
+                "loop": True,
+                "wait_for_subscribers": 2,
+                "wait_timeout": 30.0,
+                "start_delay": 1.0,
+                "statistics_file": str(out / "pressure_source.json"),
+                **loops,
+            },
+        ),
+    ]
 
 
 def run_variant(name: str, seconds: float, out: Path) -> dict[str, Any]:
@@ -70,60 +130,59 @@ def run_variant(name: str, seconds: float, out: Path) -> dict[str, Any]:
     if out.exists():
         shutil.rmtree(out)
     logs = out / "logs"
-    loops: Mapping[str, Any] = variant["loops"]
-    nodes: list[NodeProcess] = [
-        start_node("recorder", {"output_dir": str(out), "bag_name": "bag"}, env, logs),
-        start_node("comparator", {}, env, logs),
-        start_node(
-            "caliper_model",
-            {
-                "model_file": str(MODEL),
-                "mean_pressure": 1.55e6,
-                "statistics_file": str(out / "caliper_model.json"),
-                "wait_for_subscribers": 2,
-                **loops,
-            },
-            env,
-            logs,
-        ),
-    ]
-    source = start_node(
-        "pressure_source",
-        {
-            "recording": str(RECORDING),
-            "loop": True,
-            "wait_for_subscribers": 2,
-            "wait_timeout": 30.0,
-            "start_delay": 1.0,
-            "statistics_file": str(out / "pressure_source.json"),
-            **loops,
-        },
-        env,
-        logs,
-    )
-    nodes.append(source)
+    plan = _plan(out, variant["loops"])
+    one_process = bool(variant.get("one_process"))
+    if one_process:
+        nodes = [start_container(plan, env, logs)]
+    else:
+        nodes = [start_node(name, parameters, env, logs) for name, parameters in plan]
+    threads_start: dict[str, float] = {}
+    threads_end: dict[str, float] = {}
     try:
         time.sleep(8.0)
         start = {n.name: n.cpu_seconds() or 0.0 for n in nodes}
+        if one_process:
+            threads_start = nodes[0].thread_cpu_seconds()
         began = time.monotonic()
         time.sleep(seconds)
         elapsed = time.monotonic() - began
         end = {n.name: n.cpu_seconds() or 0.0 for n in nodes}
+        if one_process:
+            threads_end = nodes[0].thread_cpu_seconds()
     finally:
-        stop_node(source)
-        time.sleep(1.0)
-        for node in reversed(nodes[:-1]):
-            stop_node(node)
-    cpu = {n: 100.0 * (end[n] - start[n]) / elapsed for n in NODES}
-    import json
+        if one_process:
+            codes = {"container": stop_node(nodes[0], CONTAINER_STOP_S)}
+        else:
+            codes = {nodes[-1].name: stop_node(nodes[-1])}
+            time.sleep(1.0)
+            for node in reversed(nodes[:-1]):
+                codes[node.name] = stop_node(node)
+    process_cpu = {n: 100.0 * (end[n] - start[n]) / elapsed for n in end}
+    threads = {
+        comm: 100.0 * (value - threads_start.get(comm, 0.0)) / elapsed
+        for comm, value in threads_end.items()
+    }
+    cpu = per_node(threads) if one_process else process_cpu
 
     published = json.loads((out / "pressure_source.json").read_text())["published"]
-    predicted = json.loads((out / "caliper_model.json").read_text())["counters"]["predictions"]
+    model = json.loads((out / "caliper_model.json").read_text())
+    predicted = model["counters"]["predictions"]
     counts = {t.name: t.message_count for t in list_topics(out / "bag")}
     lost = (published - counts.get(MASTER_CYLINDER_PRESSURE.name, 0)) + (
         predicted - counts.get(PREDICTED_OUTPUTS[0].name, 0)
     )
-    return {"cpu": cpu, "published": published, "unpredicted": published - predicted, "lost": lost}
+    return {
+        "cpu": cpu,
+        "total": sum(process_cpu.values()),
+        "processes": process_cpu,
+        "threads": threads,
+        "exit_codes": codes,
+        "published": published,
+        "unpredicted": published - predicted,
+        "lost": lost,
+        "period_error_p99_us": model["period_error"]["p99_us"],
+        "latency_p99_us": model["latency"]["p99_us"],
+    }
 
 
 def main() -> int:
@@ -132,29 +191,52 @@ def main() -> int:
     parser.add_argument("--seconds", type=float, default=60.0)
     parser.add_argument("--rounds", type=int, default=1)
     parser.add_argument("--out", type=Path, default=PROJECT / "out" / "bench_cpu")
+    parser.add_argument(
+        "--variants",
+        default="before,after",
+        help=f"comma-separated, of {', '.join(VARIANTS)}",
+    )
+    parser.add_argument(
+        "--one-process",
+        action="store_true",
+        help="the four-process chain against the one-process chain (--variants after,one_process)",
+    )
+    parser.add_argument("--json", type=Path, help="write every run's figures here too")
     args = parser.parse_args()
-    results: dict[str, list[dict[str, Any]]] = {name: [] for name in VARIANTS}
+    names = ["after", "one_process"] if args.one_process else args.variants.split(",")
+    unknown = [name for name in names if name not in VARIANTS]
+    if unknown:
+        parser.error(f"unknown variants {unknown}")
+    results: dict[str, list[dict[str, Any]]] = {name: [] for name in names}
     for round_ in range(args.rounds):
-        for name in VARIANTS:
+        for name in names:
             result = run_variant(name, args.seconds, args.out / f"{name}_{round_}")
             results[name].append(result)
             cpu = ", ".join(f"{n} {v:.0f}" for n, v in result["cpu"].items())
             print(
-                f"round {round_ + 1} {name:6s}: CPU % {cpu}, total "
-                f"{sum(result['cpu'].values()):.0f}; {result['published']} published, "
+                f"round {round_ + 1} {name:11s}: CPU % {cpu}, total {result['total']:.0f}; "
+                f"model p99 period error {result['period_error_p99_us']:.0f} us, latency "
+                f"{result['latency_p99_us']:.0f} us; {result['published']} published, "
                 f"{result['unpredicted']} unpredicted, {result['lost']} lost by the recorder; "
-                f"load {os.getloadavg()[0]:.1f}",
+                f"exit {result['exit_codes']}; load {os.getloadavg()[0]:.1f}",
                 flush=True,
             )
+            if result["threads"]:
+                busiest = sorted(result["threads"].items(), key=lambda item: -item[1])
+                print(
+                    "  threads (CPU %): "
+                    + ", ".join(f"{comm} {value:.1f}" for comm, value in busiest if value >= 0.5)
+                )
+    columns = (*NODES, "shared")
     print(f"\nmean over {args.rounds} round(s) of {args.seconds:g} s, CPU % of one core:")
-    print(f"{'variant':8s}" + "".join(f"{n:>17s}" for n in NODES) + f"{'total':>8s}")
+    print(f"{'variant':12s}" + "".join(f"{n:>16s}" for n in columns) + f"{'total':>8s}")
     for name, runs in results.items():
-        means = {n: sum(r["cpu"][n] for r in runs) / len(runs) for n in NODES}
-        print(
-            f"{name:8s}"
-            + "".join(f"{means[n]:17.0f}" for n in NODES)
-            + f"{sum(means.values()):8.0f}"
-        )
+        means = {n: sum(r["cpu"].get(n, 0.0) for r in runs) / len(runs) for n in columns}
+        total = sum(r["total"] for r in runs) / len(runs)
+        print(f"{name:12s}" + "".join(f"{means[n]:16.0f}" for n in columns) + f"{total:8.0f}")
+    print("(one_process: per node its own threads; shared: the middleware's and the main thread)")
+    if args.json:
+        args.json.write_text(json.dumps(results, indent=2) + "\n", encoding="utf-8")
     return 0
 
 

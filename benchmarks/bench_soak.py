@@ -19,10 +19,18 @@ the probe's latencies, input samples without a prediction, messages lost by the 
 over the soak (from ``/proc``). Goals: period error p99 < 100 us, latency p99 < 1 ms, no input
 without its prediction, nothing lost.
 
+With ``--one-process`` the four chain nodes run in one process
+(``python -m brake_hil.nodes.container``; the probe and the reference stay processes of their
+own): the CPU is then the container's, with its threads by name, and
+``--consumers-priority`` applies to the probe only (the recorder and comparator threads share
+the container, whose other threads run at normal priority; the loops' SCHED_FIFO is per
+thread, as in separate processes).
+
 Run from the repository root (not in CI; takes ``--minutes`` plus ~15 s)::
 
     .venv/bin/python benchmarks/bench_soak.py --minutes 10 [--realtime-priority 20]
         [--consumers-priority 10] [--out out/bench_soak] [--json FILE] [--keep-bag]
+        [--one-process]
 
 On a machine other work keeps busy, a normal-priority 1 kHz loop cannot keep time (the
 reference shows it); ``--realtime-priority`` gives the loops SCHED_FIFO, and
@@ -46,10 +54,12 @@ PROJECT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(PROJECT))
 
 from brake_hil.app.chain import (  # noqa: E402
+    CONTAINER_STOP_S,
     NodeProcess,
     choose_domain_id,
     node_available,
     ros_environment,
+    start_container,
     start_node,
     stop_node,
 )
@@ -220,12 +230,14 @@ def soak(
     keep_bag: bool,
     recorder: bool,
     consumers_priority: int = 0,
+    one_process: bool = False,
 ) -> dict[str, Any]:
     """Run the chain for ``minutes`` and collect the figures.
 
     ``realtime_priority``: SCHED_FIFO of the source's and the model's loops (their other
     threads one below); ``consumers_priority``: SCHED_FIFO of the whole recorder, comparator
     and probe processes (0: normal scheduling). The reference timer always runs normally.
+    ``one_process``: the four chain nodes in one process (the container).
     """
     if out.exists():
         shutil.rmtree(out)
@@ -240,49 +252,34 @@ def soak(
     elapsed = 1.0
     cpu_start: dict[str, float] = {}
     cpu_end: dict[str, float] = {}
+    threads_start: dict[str, float] = {}
+    threads_end: dict[str, float] = {}
+    container: NodeProcess | None = None
     print(
         f"soak: {minutes:g} min, ROS_DOMAIN_ID {domain}, SCHED_FIFO loops "
         f"{realtime_priority or 'off'}, consumers {consumers_priority or 'off'}"
+        + (", the chain in one process" if one_process else "")
     )
-    try:
-        nodes.append(_start_role("reference", out / "reference.json", env, logs))
-        if has_recorder:
-            nodes.append(
-                start_node(
-                    "recorder",
-                    {"output_dir": str(out), "bag_name": "soak"},
-                    env,
-                    logs,
-                    consumers_priority,
-                )
-            )
-        nodes.append(
-            start_node(
-                "comparator",
-                {"summary_file": str(out / "comparator.json")},
-                env,
-                logs,
-                consumers_priority,
-            )
+    waits = [f"{MASTER_CYLINDER_PRESSURE.name}:{subscribers + 1}"]
+    waits += [f"{spec.name}:{subscribers}" for spec in MEASURED_OUTPUTS]
+    waits += [f"{spec.name}:{subscribers}" for spec in PREDICTED_OUTPUTS]
+    plan: list[tuple[str, dict[str, Any]]] = []  # start order: readers first
+    if has_recorder:
+        plan.append(("recorder", {"output_dir": str(out), "bag_name": "soak"}))
+    plan.append(("comparator", {"summary_file": str(out / "comparator.json")}))
+    plan.append(
+        (
+            "caliper_model",
+            {
+                "model_file": str(MODEL),
+                "mean_pressure": 1.55e6,
+                "statistics_file": str(out / "caliper_model.json"),
+                "realtime_priority": realtime_priority,
+            },
         )
-        nodes.append(
-            start_node(
-                "caliper_model",
-                {
-                    "model_file": str(MODEL),
-                    "mean_pressure": 1.55e6,
-                    "statistics_file": str(out / "caliper_model.json"),
-                    "realtime_priority": realtime_priority,
-                },
-                env,
-                logs,
-            )
-        )
-        nodes.append(_start_role("probe", out / "probe.json", env, logs, consumers_priority))
-        waits = [f"{MASTER_CYLINDER_PRESSURE.name}:{subscribers + 1}"]
-        waits += [f"{spec.name}:{subscribers}" for spec in MEASURED_OUTPUTS]
-        waits += [f"{spec.name}:{subscribers}" for spec in PREDICTED_OUTPUTS]
-        source = start_node(
+    )
+    plan.append(
+        (
             "pressure_source",
             {
                 "recording": str(RECORDING),
@@ -293,27 +290,46 @@ def soak(
                 "realtime_priority": realtime_priority,
                 "statistics_file": str(out / "pressure_source.json"),
             },
-            env,
-            logs,
         )
-        nodes.append(source)
+    )
+    try:
+        nodes.append(_start_role("reference", out / "reference.json", env, logs))
+        if one_process:
+            nodes.append(_start_role("probe", out / "probe.json", env, logs, consumers_priority))
+            container = start_container(plan, env, logs)
+            nodes.append(container)
+        else:
+            for name, parameters in plan[:-1]:
+                priority = consumers_priority if name in ("recorder", "comparator") else 0
+                nodes.append(start_node(name, parameters, env, logs, priority))
+            nodes.append(_start_role("probe", out / "probe.json", env, logs, consumers_priority))
+            source = start_node(*plan[-1], env, logs)
+            nodes.append(source)
         time.sleep(8.0)  # start-up: imports, discovery, the source's wait
         cpu_start = {n.name: n.cpu_seconds() or 0.0 for n in nodes}
+        threads_start = container.thread_cpu_seconds() if container is not None else {}
         started = time.monotonic()
         time.sleep(minutes * 60.0)
         elapsed = time.monotonic() - started
         cpu_end = {n.name: n.cpu_seconds() or 0.0 for n in nodes}
+        threads_end = container.thread_cpu_seconds() if container is not None else {}
     finally:
         exit_codes = {}
         if source is not None:
             exit_codes[source.name] = stop_node(source)
-        time.sleep(1.0)  # in flight: the last predictions, the recorder's queues
+            time.sleep(1.0)  # in flight: the last predictions, the recorder's queues
         for node in reversed(nodes):
-            exit_codes[node.name] = stop_node(node)
+            if node.name not in exit_codes:
+                timeout_s = CONTAINER_STOP_S if node is container else 10.0
+                exit_codes[node.name] = stop_node(node, timeout_s)
     cpu = {
         name: 100.0 * (cpu_end[name] - cpu_start.get(name, 0.0)) / elapsed
         for name in cpu_end
         if name in cpu_start
+    }
+    threads = {
+        comm: 100.0 * (value - threads_start.get(comm, 0.0)) / elapsed
+        for comm, value in threads_end.items()
     }
     result: dict[str, Any] = {
         "minutes": minutes,
@@ -330,6 +346,8 @@ def soak(
         "reference": _read(out / "reference.json"),
         "comparator": _read(out / "comparator.json"),
         "cpu_percent": cpu,
+        "container_threads_cpu_percent": threads,
+        "one_process": one_process,
         "exit_codes": exit_codes,
     }
     if has_recorder and (out / "soak" / "metadata.yaml").is_file():
@@ -411,6 +429,14 @@ def report(result: dict[str, Any]) -> None:
     else:
         print("recorder: not run")
     print("CPU %: " + ", ".join(f"{k} {v:.0f}" for k, v in result["cpu_percent"].items()))
+    chain = sum(v for k, v in result["cpu_percent"].items() if k not in ("probe", "reference"))
+    print(f"CPU % of the chain's four nodes together: {chain:.0f}")
+    threads = sorted(result.get("container_threads_cpu_percent", {}).items(), key=lambda i: -i[1])
+    if threads:
+        print(
+            "container threads, CPU %: "
+            + ", ".join(f"{comm} {value:.1f}" for comm, value in threads if value >= 0.5)
+        )
     print(f"exit codes: {result['exit_codes']}; load average {result['machine']['load_average']}")
 
 
@@ -434,6 +460,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--json", type=Path, help="write the figures here too")
     parser.add_argument("--keep-bag", action="store_true", help="keep the recorder's MCAP")
     parser.add_argument("--no-recorder", action="store_true")
+    parser.add_argument(
+        "--one-process",
+        action="store_true",
+        help="the four chain nodes in one process (python -m brake_hil.nodes.container)",
+    )
     parser.add_argument("--role", choices=("probe", "reference"), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.role == "probe":
@@ -449,6 +480,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         args.keep_bag,
         not args.no_recorder,
         args.consumers_priority,
+        args.one_process,
     )
     report(result)
     if args.json:

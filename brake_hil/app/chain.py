@@ -11,6 +11,15 @@ comparator's run summary, the model's timing, where the MCAP is, and the recorde
 checked against the batch model on the recorded input; it prints nothing (the command line,
 ``python -m brake_hil.nodes.chain``, is :mod:`brake_hil.cli.chain`).
 
+With ``one_process`` the same four nodes run in one process instead
+(``python -m brake_hil.nodes.container``, one rclpy context: Fast DDS delivers between them
+inside the process), each with the same parameters from its own params file, started with the
+same environment; the launcher waits for the source's statistics file (written as its replay
+ends) instead of the source's exit, and stops the container with SIGINT, which stops the nodes
+in the same order (the recorder once it has caught up). Exit codes and CPU time are then the
+container's (``ChainResult.exit_codes["container"]``). Less CPU, worse loop timing (the GIL is
+shared): see :mod:`brake_hil.nodes.container`.
+
 This module imports no rclpy: the nodes run in their own processes. The recorder is
 optional: without ``brake_hil/nodes/recorder.py`` the chain runs without it and says so.
 Node logs go to ``DIR/logs/``.
@@ -60,6 +69,7 @@ __all__ = [
     "ros_environment",
     "run_can_chain",
     "run_chain",
+    "start_container",
     "start_node",
     "stop_node",
 ]
@@ -67,6 +77,11 @@ __all__ = [
 PROJECT = Path(__file__).resolve().parents[2]
 DEFAULT_RECORDING = PROJECT / "bags" / "one_washer_lti"
 DEFAULT_MODEL = PROJECT / "config" / "rig_default.yaml"
+CONTAINER = "container"
+"""The name of the one-process chain's process (``brake_hil.nodes.container``)."""
+CONTAINER_STOP_S = 100.0
+"""How long the launcher gives the container to stop after SIGINT (s): the source's and the
+model's wait for acknowledgements (8 s each) and the recorder's catch-up (at most 60 s)."""
 
 
 def ros_environment(domain_id: int | None = None) -> dict[str, str]:
@@ -120,6 +135,27 @@ class NodeProcess:
             return None
         return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
+    def thread_cpu_seconds(self) -> dict[str, float]:
+        """CPU time (s) of each thread so far, by kernel name (``comm``), equal names summed.
+
+        Empty once it has exited (Linux ``/proc/PID/task``). The container names the nodes'
+        threads (``model-loop``, ``comparator-loop``, ...: :mod:`brake_hil.nodes.container`).
+        """
+        ticks = os.sysconf("SC_CLK_TCK")
+        seconds: dict[str, float] = {}
+        try:
+            tasks = list(Path(f"/proc/{self.process.pid}/task").iterdir())
+        except OSError:
+            return seconds
+        for task in tasks:
+            try:
+                comm = (task / "comm").read_text().strip()
+                fields = (task / "stat").read_text().rsplit(")", 1)[1].split()
+            except (OSError, IndexError):
+                continue
+            seconds[comm] = seconds.get(comm, 0.0) + (int(fields[11]) + int(fields[12])) / ticks
+        return seconds
+
 
 def start_node(
     name: str,
@@ -133,11 +169,7 @@ def start_node(
     ``fifo_priority`` > 0 starts the whole process under ``SCHED_FIFO`` at that priority (as
     ``chrt -f`` would; needs CAP_SYS_NICE, else the node runs normally).
     """
-    workdir.mkdir(parents=True, exist_ok=True)
-    params = workdir / f"{name}.params.yaml"
-    params.write_text(
-        yaml.safe_dump({name: {"ros__parameters": dict(parameters)}}), encoding="utf-8"
-    )
+    params = _params_file(name, parameters, workdir)
     log = workdir / f"{name}.log"
     command = [
         sys.executable,
@@ -157,6 +189,44 @@ def start_node(
             preexec_fn=(lambda: set_realtime_priority(fifo_priority)) if fifo_priority else None,
         )
     return NodeProcess(name, process, log)
+
+
+def _params_file(name: str, parameters: Mapping[str, Any], workdir: Path) -> Path:
+    workdir.mkdir(parents=True, exist_ok=True)
+    params = workdir / f"{name}.params.yaml"
+    params.write_text(
+        yaml.safe_dump({name: {"ros__parameters": dict(parameters)}}), encoding="utf-8"
+    )
+    return params
+
+
+def start_container(
+    nodes: Sequence[tuple[str, Mapping[str, Any]]],
+    env: Mapping[str, str],
+    workdir: Path,
+    fifo_priority: int = 0,
+) -> NodeProcess:
+    """Start ``brake_hil.nodes.container`` running ``nodes`` (name, parameters), in that order.
+
+    Each node's parameters go to its own params file, as :func:`start_node` writes them; the
+    process is started as :func:`start_node` starts a node (own session, log
+    ``container.log``). ``fifo_priority`` > 0: the whole process under ``SCHED_FIFO``.
+    """
+    command = [sys.executable, "-m", f"brake_hil.nodes.{CONTAINER}"]
+    for name, parameters in nodes:
+        params = _params_file(name, parameters, workdir)
+        command += ["--node", name, "--ros-args", "--params-file", str(params)]
+    log = workdir / f"{CONTAINER}.log"
+    with log.open("wb") as stream:
+        process = subprocess.Popen(
+            command,
+            env=dict(env),
+            stdout=stream,
+            stderr=subprocess.STDOUT,
+            start_new_session=True,
+            preexec_fn=(lambda: set_realtime_priority(fifo_priority)) if fifo_priority else None,
+        )
+    return NodeProcess(CONTAINER, process, log)
 
 
 def stop_node(node: NodeProcess, timeout_s: float = 10.0) -> int:
@@ -254,6 +324,7 @@ def run_chain(
     progress: Notice | None = None,
     recorder: bool = True,
     realtime_priority: int = 0,
+    one_process: bool = False,
 ) -> ChainResult:
     """Run the chain on ``recording`` once; see the module docstring.
 
@@ -267,6 +338,7 @@ def run_chain(
         recorder: record the run to MCAP (when the recorder node exists).
         realtime_priority: ``SCHED_FIFO`` priority of the source's and the model's loop
             threads (0: none).
+        one_process: the four nodes in one process (:mod:`brake_hil.nodes.container`).
 
     Returns:
         What the nodes left: summaries, exit codes, CPU times, the checked recording.
@@ -294,54 +366,62 @@ def run_chain(
     wall_s = 0.0
     say(
         f"chain on {recording} ({length_s:.1f} s at rate {rate:g}), model {model_file}, "
-        f"ROS_DOMAIN_ID {env['ROS_DOMAIN_ID']}"
+        f"ROS_DOMAIN_ID {env['ROS_DOMAIN_ID']}" + (", one process" if one_process else "")
     )
+    # In start order: readers before their writers (the launcher stops them in reverse).
+    plan: list[tuple[str, dict[str, Any]]] = []
+    if has_recorder:
+        plan.append(("recorder", {"output_dir": str(out_dir), "bag_name": bag_name}))
+    plan.append(("comparator", {"summary_file": str(out_dir / "comparator.json")}))
+    model_parameters = {
+        "model_file": str(model_file),
+        "mean_pressure": mean_pressure,
+        "statistics_file": str(out_dir / "caliper_model.json"),
+        "realtime_priority": realtime_priority,
+        "wait_for_subscribers": subscribers,  # comparator (and recorder) matched first
+    }
+    plan.append(("caliper_model", model_parameters))
+    source_parameters = {
+        "recording": str(recording),
+        "statistics_file": str(out_dir / "pressure_source.json"),
+        "rate": float(rate),
+        "exit_at_end": True,
+        # Each topic's own consumers: the model takes p_i, the comparator the measured
+        # outputs and the predictions, the recorder everything (p_a only it).
+        "wait_for_subscribers": 0,
+        "wait_for_topics": [
+            f"{spec.name}:{subscribers}"
+            for spec in (MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS, *PREDICTED_OUTPUTS)
+        ]
+        + ([f"{AIR_PRESSURE.name}:1"] if has_recorder and source.air_pressure is not None else []),
+        "wait_timeout": 30.0,
+        "start_delay": 1.0,
+        "realtime_priority": realtime_priority,
+    }
+    plan.append(("pressure_source", source_parameters))
+    source_done = out_dir / "pressure_source.json"  # written as the source ends
+    source_done.unlink(missing_ok=True)
     try:
-        if has_recorder:
-            nodes.append(
-                start_node(
-                    "recorder", {"output_dir": str(out_dir), "bag_name": bag_name}, env, logs
+        if one_process:
+            container = start_container(plan, env, logs)
+            nodes.append(container)
+            started = time.monotonic()
+            if not _wait_for_file(source_done, container, length_s / rate + 45.0):
+                code = container.returncode()
+                say(
+                    "pressure_source did not finish in time: stopping the container"
+                    if code is None
+                    else f"the container exited with status {code} before the source finished"
                 )
-            )
-        nodes.append(
-            start_node("comparator", {"summary_file": str(out_dir / "comparator.json")}, env, logs)
-        )
-        model_parameters = {
-            "model_file": str(model_file),
-            "mean_pressure": mean_pressure,
-            "statistics_file": str(out_dir / "caliper_model.json"),
-            "realtime_priority": realtime_priority,
-            "wait_for_subscribers": subscribers,  # comparator (and recorder) matched first
-        }
-        nodes.append(start_node("caliper_model", model_parameters, env, logs))
-        source_parameters = {
-            "recording": str(recording),
-            "statistics_file": str(out_dir / "pressure_source.json"),
-            "rate": float(rate),
-            "exit_at_end": True,
-            # Each topic's own consumers: the model takes p_i, the comparator the measured
-            # outputs and the predictions, the recorder everything (p_a only it).
-            "wait_for_subscribers": 0,
-            "wait_for_topics": [
-                f"{spec.name}:{subscribers}"
-                for spec in (MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS, *PREDICTED_OUTPUTS)
-            ]
-            + (
-                [f"{AIR_PRESSURE.name}:1"]
-                if has_recorder and source.air_pressure is not None
-                else []
-            ),
-            "wait_timeout": 30.0,
-            "start_delay": 1.0,
-            "realtime_priority": realtime_priority,
-        }
-        player = start_node("pressure_source", source_parameters, env, logs)
-        nodes.append(player)
-        started = time.monotonic()
-        try:
-            player.process.wait(length_s / rate + 45.0)
-        except subprocess.TimeoutExpired:
-            say("pressure_source did not finish in time: stopping it")
+        else:
+            for name, parameters in plan:
+                nodes.append(start_node(name, parameters, env, logs))
+            player = nodes[-1]
+            started = time.monotonic()
+            try:
+                player.process.wait(length_s / rate + 45.0)
+            except subprocess.TimeoutExpired:
+                say("pressure_source did not finish in time: stopping it")
         time.sleep(1.0)  # the model drains, the comparator scores its last cycle
         wall_s = time.monotonic() - started
     finally:
@@ -358,6 +438,18 @@ def run_chain(
         say,
         expected=int(source.time.size),
     )
+
+
+def _wait_for_file(path: Path, node: NodeProcess, timeout_s: float, poll_s: float = 0.1) -> bool:
+    """Wait until ``path`` exists (at most ``timeout_s``, or until ``node`` exits)."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if path.exists():
+            return True
+        if node.returncode() is not None:
+            return path.exists()
+        time.sleep(poll_s)
+    return False
 
 
 RECORDER_QUIET_S = 2.0
@@ -400,7 +492,8 @@ def wait_until_quiet(
 def _stop_all(nodes: list[NodeProcess], stops: _Stops, bag: Path | None = None) -> None:
     """Stop the nodes, last started first (source, model, comparator, recorder).
 
-    The recorder is stopped once its files stop growing (:func:`wait_until_quiet`).
+    The recorder is stopped once its files stop growing (:func:`wait_until_quiet`); the
+    container stops its nodes in that order itself, given :data:`CONTAINER_STOP_S`.
     """
     for node in reversed(nodes):
         if node.name == "recorder" and bag is not None:
@@ -408,7 +501,8 @@ def _stop_all(nodes: list[NodeProcess], stops: _Stops, bag: Path | None = None) 
         cpu = node.cpu_seconds()
         if cpu is not None:
             stops.cpu_s[node.name] = cpu
-        stops.exit_codes[node.name] = stop_node(node)
+        timeout_s = CONTAINER_STOP_S if node.name == CONTAINER else 10.0
+        stops.exit_codes[node.name] = stop_node(node, timeout_s)
 
 
 def _collect(

@@ -1,6 +1,7 @@
 """The command line of the node-chain launcher: ``python -m brake_hil.nodes.chain``.
 
-Parses the options, runs :func:`brake_hil.app.chain.run_chain` (or
+Parses the options, runs :func:`brake_hil.app.chain.run_chain` (with ``--one-process`` the
+four nodes in one process, :mod:`brake_hil.nodes.container`; or
 :func:`~brake_hil.app.chain.run_can_chain` with ``--can-emulator``), prints its notices as
 they come and then the comparator's run summary, the model's timing and where the MCAP is.
 Exit status: 0; 1 when a node exited with an error, or when an input sample was lost or left
@@ -15,6 +16,7 @@ from pathlib import Path
 import sys
 
 from brake_hil.app.chain import (
+    CONTAINER,
     DEFAULT_MODEL,
     DEFAULT_RECORDING,
     PROJECT,
@@ -28,7 +30,8 @@ from brake_hil.topics import OUTPUT_CHANNELS
 __all__ = ["build_parser", "main", "result_lines"]
 
 DESCRIPTION = (
-    "The node chain as separate processes: source -> caliper model -> comparator -> recorder."
+    "The node chain as separate processes (or one, --one-process): source -> caliper model -> "
+    "comparator -> recorder."
 )
 
 
@@ -74,6 +77,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="SCHED_FIFO priority of the source's and the model's loop threads (0: none)",
     )
     parser.add_argument(
+        "--one-process",
+        action="store_true",
+        help="run the four nodes in one process (python -m brake_hil.nodes.container: one "
+        "rclpy context, Fast DDS delivers inside the process): under half the CPU, but the "
+        "model's loop shares the GIL (period error and latency of milliseconds at p99)",
+    )
+    parser.add_argument(
         "--can-emulator",
         action="store_true",
         help="instead of replaying RECORDING, run against the rig emulator over CAN (slcan pty)",
@@ -89,7 +99,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``python -m brake_hil.nodes.chain``; returns the exit status."""
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.one_process and args.can_emulator:
+        parser.error("--one-process runs a replay; it does not combine with --can-emulator")
     try:
         if args.can_emulator:
             out = (
@@ -110,6 +123,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 progress=print,
                 recorder=not args.no_recorder,
                 realtime_priority=args.realtime_priority,
+                one_process=args.one_process,
             )
     except BrakeHilError as err:
         print(f"chain: error: {err}", file=sys.stderr)
@@ -155,8 +169,9 @@ def result_lines(result: ChainResult) -> list[str]:
             f"{counters['overruns']} overruns"
         )
     if result.cpu_s:
+        per = "of the one process" if list(result.cpu_s) == [CONTAINER] else "per node"
         lines.append(
-            "CPU time (s) per node: "
+            f"CPU time (s) {per}: "
             + ", ".join(f"{name} {seconds:.1f}" for name, seconds in result.cpu_s.items())
         )
     if result.bag is not None:

@@ -7,6 +7,7 @@ __all__ = [
     "chain",
     "common",
     "comparator",
+    "container",
     "pressure_source",
     "recorder",
     "rig_emulator",

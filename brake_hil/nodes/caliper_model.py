@@ -90,10 +90,23 @@ class CaliperModelNode(common.LoopNode):
 
     loop_name = "model loop"
 
-    def __init__(self) -> None:
+    def __init__(self, cli_args: Sequence[str] | None = None, own_process: bool = True) -> None:
+        """Build the node; its loop starts at once.
+
+        Args:
+            cli_args: the node's own ROS arguments (``--ros-args ...``), beside the process's
+                (rclpy ``Node(cli_args=...)``): how a container gives each node its own.
+            own_process: False when the node shares its process with others (the container):
+                then ``realtime_priority`` sets only the loop thread's scheduling, not every
+                thread's of the process.
+        """
         # No parameter services: nothing spins this node but its loop (parameters are
         # read-only, set at start from the command line or a params file).
-        super().__init__(NAME, start_parameter_services=False)
+        super().__init__(
+            NAME,
+            cli_args=list(cli_args) if cli_args is not None else None,
+            start_parameter_services=False,
+        )
         settings = common.declare_settings(self, CaliperModelSettings)
         self.settings = settings
         period_ns = round(settings.loop_period * 1e9)
@@ -153,7 +166,7 @@ class CaliperModelNode(common.LoopNode):
             name="caliper-model-loop",
         )
         self.get_logger().info(f"{self.model.description} from {self.model.path}")
-        if settings.realtime_priority > 0:
+        if settings.realtime_priority > 0 and own_process:
             # The middleware's receive threads one step above the loop: a sample is taken in
             # as it arrives, even while the loop spins towards its deadline (a loop above them
             # would hold them off, delaying arrivals until after its tick, and the phase lock

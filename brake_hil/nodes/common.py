@@ -13,7 +13,8 @@
   nodes publish arrays of them on ``/diagnostics`` (:data:`DIAGNOSTICS_TOPIC`), the
   comparator also on ``/brake/comparison`` (:data:`COMPARISON_TOPIC`).
 * :func:`spin_until_signal` (callbacks on a background executor, rclpy's EventsExecutor when
-  available) or :func:`wait_for_signal` (a node whose own thread does the work) run until
+  available: :class:`BackgroundSpinner`) or :func:`wait_for_signal` (a node whose own thread
+  does the work) run until
   SIGINT/SIGTERM, so a node can finish its work (drain, final diagnostics, files,
   :func:`wait_for_acks`) before ``destroy_node()`` / ``rclpy.shutdown()``. Start rclpy with
   :func:`init_ros` (rclpy's own signal handler off, ours on).
@@ -401,39 +402,80 @@ def make_executor(context: Context | None = None) -> Executor:
     return SingleThreadedExecutor(context=context)
 
 
+class BackgroundSpinner:
+    """A node's callbacks run by an executor of its own on a background thread.
+
+    Spins until ``stop`` is set (:meth:`stop`), or until a callback raises (the executor stops
+    at the first exception, which is printed; :attr:`healthy` turns False). The node outlives
+    the executor, so it can finish its work (drain, final diagnostics) before
+    ``destroy_node()``. :func:`spin_until_signal` runs one until a signal; the container
+    (:mod:`brake_hil.nodes.container`) runs one per node that has callbacks.
+    """
+
+    def __init__(
+        self, node: Node, stop: threading.Event | None = None, name: str = "executor"
+    ) -> None:
+        self.stop_event = stop if stop is not None else threading.Event()
+        self._failed = threading.Event()
+        self._executor = make_executor()
+        self._executor.add_node(node)
+        self._thread = threading.Thread(
+            target=_spin,
+            args=(self._executor, self.stop_event, self._failed),
+            name=name,
+            daemon=True,
+        )
+        self._thread.start()
+
+    @property
+    def alive(self) -> bool:
+        """True while the executor spins."""
+        return self._thread.is_alive()
+
+    @property
+    def healthy(self) -> bool:
+        """False once a callback raised."""
+        return not self._failed.is_set()
+
+    @property
+    def native_id(self) -> int | None:
+        """The spinning thread's kernel id (``/proc/self/task/<id>``)."""
+        return self._thread.native_id
+
+    def stop(self, timeout_s: float = 2.0) -> bool:
+        """Stop spinning and shut the executor down; returns :attr:`healthy`."""
+        self.stop_event.set()
+        self._thread.join(timeout_s)
+        if not self._thread.is_alive():
+            self._executor.shutdown()
+        return self.healthy
+
+
 def spin_until_signal(node: Node, stop: threading.Event | None = None) -> bool:
     """Run ``node``'s callbacks on a background executor until SIGINT or SIGTERM.
 
-    Also until ``stop`` is set, or the context shuts down; then stop the executor.
+    Also until ``stop`` is set, or the context shuts down; then stop the executor
+    (:class:`BackgroundSpinner`).
 
     Returns False when a callback raised (the executor stops at the first exception, which is
     logged), True otherwise: ``main`` turns False into exit status 1.
     """
     stop = stop if stop is not None else threading.Event()
-    failed = threading.Event()
 
     def on_signal(signum: int, frame: object) -> None:
         del signum, frame
         stop.set()
 
     previous = {sig: signal.signal(sig, on_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
-    executor = make_executor()
-    executor.add_node(node)
-    thread = threading.Thread(
-        target=_spin, args=(executor, stop, failed), name="executor", daemon=True
-    )
-    thread.start()
+    spinner = BackgroundSpinner(node, stop)
     try:
-        while not stop.wait(0.1) and node.context.ok() and thread.is_alive():
+        while not stop.wait(0.1) and node.context.ok() and spinner.alive:
             pass
     finally:
-        stop.set()
-        thread.join(2.0)
+        spinner.stop()
         for sig, handler in previous.items():
             signal.signal(sig, handler)
-        if not thread.is_alive():
-            executor.shutdown()
-    return not failed.is_set()
+    return spinner.healthy
 
 
 def wait_for_signal(finished: Callable[[], bool] = lambda: False) -> None:

@@ -30,7 +30,7 @@ as JSON.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 import math
 import struct
@@ -106,10 +106,15 @@ class ComparatorNode(common.LoopNode):
 
     loop_name = "comparator loop"
 
-    def __init__(self) -> None:
+    def __init__(self, cli_args: Sequence[str] | None = None) -> None:
+        """Build the node (``cli_args``: its own ROS arguments); its loop starts at once."""
         # One thread does all the work (no executor, so no parameter services): it takes the
         # six 1 kHz topics in batches every 50 ms, without a Python callback per message.
-        super().__init__(NAME, start_parameter_services=False)
+        super().__init__(
+            NAME,
+            cli_args=list(cli_args) if cli_args is not None else None,
+            start_parameter_services=False,
+        )
         self.settings = settings = common.declare_settings(self, ComparatorSettings)
         excitation_hz, sample_period = settings.excitation_hz, settings.sample_period
         self._window_cycles = settings.window_cycles

@@ -38,7 +38,7 @@ Parameters: :class:`~brake_hil.nodes.settings.PressureSourceSettings` (``config/
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 import sys
 import threading
 import time
@@ -94,8 +94,17 @@ def replay_channels(recording: Recording, publish_measured: bool) -> dict[TopicS
 class PressureSourceNode(Node):
     """Replays a recording, or acquires from the rig's CAN DAQ, onto the contract topics."""
 
-    def __init__(self) -> None:
-        super().__init__(NAME)
+    def __init__(self, cli_args: Sequence[str] | None = None, own_process: bool = True) -> None:
+        """Build the node; its worker thread starts at once.
+
+        Args:
+            cli_args: the node's own ROS arguments (``--ros-args ...``), beside the process's
+                (rclpy ``Node(cli_args=...)``): how a container gives each node its own.
+            own_process: False when the node shares its process with others (the container):
+                then ``realtime_priority`` sets only the worker thread's scheduling, not every
+                thread's of the process.
+        """
+        super().__init__(NAME, cli_args=list(cli_args) if cli_args is not None else None)
         self.settings = settings = common.declare_settings(self, PressureSourceSettings)
         self.mode = settings.mode
         if settings.rate <= 0.0:
@@ -128,7 +137,8 @@ class PressureSourceNode(Node):
         else:
             raise BrakeHilError(f"mode must be replay or can, got {self.mode!r}")
         self.create_timer(settings.diagnostics_period, self._report)
-        if settings.realtime_priority > 0:  # the worker one step above the node's other threads
+        if settings.realtime_priority > 0 and own_process:
+            # the worker one step above the node's other threads
             set_process_realtime_priority(max(1, settings.realtime_priority - 1))
         self._thread = threading.Thread(target=self._guarded(target), name=NAME, daemon=True)
         self._thread.start()

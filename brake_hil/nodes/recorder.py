@@ -94,8 +94,9 @@ def offered_qos(profile: QoSProfile) -> Qos:
 class RecorderNode(Node):
     """Subscribes to matching topics as they appear and streams them into a recording."""
 
-    def __init__(self) -> None:
-        super().__init__("recorder")
+    def __init__(self, cli_args: Sequence[str] | None = None) -> None:
+        """Build the node (``cli_args``: its own ROS arguments); it records once spun."""
+        super().__init__("recorder", cli_args=list(cli_args) if cli_args is not None else None)
         self.settings = settings = common.declare_settings(self, RecorderSettings)
         bag_name = settings.bag_name
         if not bag_name:
@@ -202,6 +203,11 @@ class RecorderNode(Node):
 
         self._recorded[name] = self.create_subscription(cls, name, on_message, qos, raw=True)
         self.get_logger().info(f"recording {name} ({msgtype})")
+
+    @property
+    def message_count(self) -> int:
+        """Messages recorded so far."""
+        return int(self._recorder.message_count)
 
     def drain(self, quiet_s: float = 0.05, timeout_s: float = 0.5) -> None:
         """Record what the middleware still holds.
