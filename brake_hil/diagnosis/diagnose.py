@@ -124,11 +124,7 @@ class Diagnosis:
                 "effects": list(self.effects),
                 "confidence": round(self.confidence, 3),
                 "explanation": self.explanation,
-                **(
-                    {"unexplained_form": self.residual.verdict_entry()}
-                    if self.residual is not None and self.effects == ("unexplained",)
-                    else {}
-                ),
+                **self._unexplained_form(),
             },
             **({"residual": self.residual.as_dict()} if self.residual is not None else {}),
             "mismatch": {
@@ -176,6 +172,14 @@ class Diagnosis:
                 "held_out": [[w.start, w.end] for w in self.dataset.held_out],
             },
         }
+
+
+    def _unexplained_form(self) -> dict[str, object]:
+        """``verdict.unexplained_form`` (interface.md) when unexplained and a form stands out."""
+        if self.residual is None or self.effects != ("unexplained",):
+            return {}
+        entry = self.residual.verdict_entry()
+        return {} if entry is None else {"unexplained_form": entry}
 
 
 def _score(baseline: Fit, fitted: Fit) -> float:

@@ -15,8 +15,10 @@ import shutil
 import pytest
 
 from brake_hil.app.benchmark import read_labels, run_cases, score
+from brake_hil.diagnosis.diagnose import diagnose
+from brake_hil.io.recording_reader import read_recording
 from brake_hil.io.recording_writer import save_recording
-from brake_hil.physics.rig import Rig
+from brake_hil.physics.rig import Rig, load_rig
 from brake_hil.virtual_rig.effects import make_effect
 from brake_hil.virtual_rig.excitation import seed_pulsing
 from brake_hil.virtual_rig.simulator import simulate_rig
@@ -66,3 +68,18 @@ def test_blind_diagnosis_names_each_effect_and_passes_the_null(case_set: Path) -
     assert figures["top1_accuracy_single"] == 1.0, figures["per_case"]
     assert figures["unexplained_recall"] == 1.0, figures["per_case"]
     assert figures["held_out_nrmse_improvement_median"] > 2.0
+
+
+def test_an_unexplained_misfit_is_described_by_its_generic_form(case_set: Path) -> None:
+    """The load cell's rising gain: unexplained, and what it looks like (interface.md)."""
+    folder = case_set / "cases" / "e"
+    result = diagnose(read_recording(folder / "recording"), load_rig(folder / "rig.yaml"))
+    document = result.as_dict()
+    verdict = document["verdict"]
+    assert isinstance(verdict, dict) and verdict["effects"] == ["unexplained"]
+    form = verdict["unexplained_form"]
+    assert form["channel"] == "F_k" and form["improvement"] > 3.0, form
+    assert form["form"] in ("static_map", "level_gain"), form
+    assert "looks like" in verdict["explanation"]
+    assert "residual" in document and "physics_checks" in document
+    json.dumps(document)  # plain JSON
