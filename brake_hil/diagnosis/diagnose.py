@@ -173,7 +173,6 @@ class Diagnosis:
             },
         }
 
-
     def _unexplained_form(self) -> dict[str, object]:
         """``verdict.unexplained_form`` (interface.md) when unexplained and a form stands out."""
         if self.residual is None or self.effects != ("unexplained",):
