@@ -147,6 +147,7 @@ def segment_check(model: Model, hypothesis: Fit) -> CheckOutcome:
     if own == 0 or len(model.dataset.train) < 2:
         return CheckOutcome("segments", True, "one segment: nothing to compare")
     specs = model.parameters()[:own]
+    logarithmic = np.array([log for *_, log in specs], dtype=bool)
     per_segment: list[tuple[np.ndarray, np.ndarray]] = []
     for window in model.dataset.train:
         alone = Model(model.calibration, model.candidates, replace(model.dataset, train=(window,)))
@@ -160,7 +161,6 @@ def segment_check(model: Model, hypothesis: Fit) -> CheckOutcome:
             if fitted.uncertainty is None
             else np.asarray(fitted.uncertainty[:own], dtype=float)
         )
-        logarithmic = np.array([log for *_, log in specs], dtype=bool)
         search = np.where(logarithmic, np.log(np.maximum(values, 1e-300)), values)
         search_sigma = np.where(logarithmic, sigma / np.maximum(np.abs(values), 1e-300), sigma)
         per_segment.append((search, np.nan_to_num(search_sigma, nan=np.inf)))

@@ -15,6 +15,18 @@ _DEFLECTION_SMOOTHING = 1.0e-7
 """Caliper displacement (m) below which ``|x_c|`` is rounded off."""
 
 
+def cocking_normal_force(
+    bore_area: float, guide_length: float, bore_pressure: Signal, caliper_displacement: Signal
+) -> Signal:
+    """Contact force from cocking ``4 A_eb p_b |x_c| / l_g`` (N), seed eq. 8 on ``l_g``.
+
+    ``|x_c|`` smoothed over ``_DEFLECTION_SMOOTHING`` (m); pressure below gauge zero gives none.
+    """
+    tilt = fm.sqrt(caliper_displacement**2 + _DEFLECTION_SMOOTHING**2)
+    force: Signal = 4.0 * bore_area * fm.maximum(bore_pressure, 0.0) * tilt / guide_length
+    return force
+
+
 @dataclass(frozen=True)
 class DahlBoreFriction(TruthLaw):
     """Piston-bore friction bound to a rig (SI): the host's bore-force port, state ``w``."""
@@ -27,12 +39,10 @@ class DahlBoreFriction(TruthLaw):
     bore_area: float  # A_eb, m^2
 
     def normal_force(self, bore_pressure: Signal, caliper_displacement: Signal) -> Signal:
-        """Contact force from cocking ``4 A_eb p_b |x_c| / l_g`` (N), seed eq. 8 on ``l_g``."""
-        tilt = fm.sqrt(caliper_displacement**2 + _DEFLECTION_SMOOTHING**2)
-        force: Signal = (
-            4.0 * self.bore_area * fm.maximum(bore_pressure, 0.0) * tilt / self.guide_length
+        """Contact force from cocking (N): :func:`cocking_normal_force`."""
+        return cocking_normal_force(
+            self.bore_area, self.guide_length, bore_pressure, caliper_displacement
         )
-        return force
 
     def coefficient(self, velocity: Signal) -> Signal:
         """Stribeck friction coefficient ``mu_k + (mu_s - mu_k) exp(-(v/v_S)^2)`` (-)."""

@@ -9,13 +9,11 @@ import numpy as np
 
 from brake_hil.virtual_rig.effects import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
+from brake_hil.virtual_rig.effects.bore_friction import cocking_normal_force
 from brake_hil.virtual_rig.family_b.base import FamilyBEffect
 from brake_hil.virtual_rig.laws import LtiPlant, Signal, TruthLaw
 
 __all__ = ["BoreFrictionB", "StribeckBoreFriction"]
-
-_DEFLECTION_SMOOTHING = 1.0e-7
-"""Caliper displacement (m) below which ``|x_c|`` is rounded off."""
 
 
 @dataclass(frozen=True)
@@ -32,12 +30,10 @@ class StribeckBoreFriction(TruthLaw):
     bore_area: float  # A_eb, m^2
 
     def normal_force(self, bore_pressure: Signal, caliper_displacement: Signal) -> Signal:
-        """Contact force from cocking ``4 A_eb p_b |x_c| / l_g`` (N), seed eq. 8 on ``l_g``."""
-        tilt = fm.sqrt(caliper_displacement**2 + _DEFLECTION_SMOOTHING**2)
-        force: Signal = (
-            4.0 * self.bore_area * fm.maximum(bore_pressure, 0.0) * tilt / self.guide_length
+        """Contact force from cocking (N): family a's, the same contact geometry."""
+        return cocking_normal_force(
+            self.bore_area, self.guide_length, bore_pressure, caliper_displacement
         )
-        return force
 
     def coefficient(self, velocity: Signal) -> Signal:
         """``mu(v) tanh(v / v_e) + mu_v v`` (-), ``mu = mu_C + (mu_S - mu_C) exp(-|v/v_S|^d)``."""
