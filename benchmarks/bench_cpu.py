@@ -19,7 +19,7 @@ Variants:
   (``python -m brake_hil.nodes.container``: one rclpy context, one DDS participant, Fast DDS
   delivering inside the process). The process's CPU is the total; per node, the CPU of each
   node's own threads (``/proc/PID/task``: the container names them ``model-loop``,
-  ``comparator-loop``, ``source-worker``, ``source-executor``, ``recorder-exec``); the rest
+  ``comparator-loop``, ``source-worker``, ``source-executor``, ``recorder-loop``); the rest
   (the middleware's threads, the main thread) is ``shared``.
 
 ``--variants`` picks which (default ``before,after``); ``--one-process`` is
@@ -65,13 +65,19 @@ VARIANTS: dict[str, dict[str, Any]] = {
     "before": {"env": {"BRAKE_HIL_DDS_PROFILE": "off"}, "loops": {"spin_margin_us": 150}},
     "after": {"env": {}, "loops": {"spin_margin_us": 0}},
     "one_process": {"env": {}, "loops": {"spin_margin_us": 0}, "one_process": True},
+    "model_apart": {
+        "env": {},
+        "loops": {"spin_margin_us": 0},
+        "one_process": True,
+        "apart": ("caliper_model",),
+    },
 }
 THREADS = {
     "source-worker": "pressure_source",
     "source-executor": "pressure_source",
     "model-loop": "caliper_model",
     "comparator-loop": "comparator",
-    "recorder-exec": "recorder",
+    "recorder-loop": "recorder",
 }
 """The container's thread names (``/proc/PID/task/*/comm``) and their nodes."""
 
@@ -132,8 +138,10 @@ def run_variant(name: str, seconds: float, out: Path) -> dict[str, Any]:
     logs = out / "logs"
     plan = _plan(out, variant["loops"])
     one_process = bool(variant.get("one_process"))
+    apart = tuple(variant.get("apart", ()))
     if one_process:
-        nodes = [start_container(plan, env, logs)]
+        nodes = [start_container([n for n in plan if n[0] not in apart], env, logs)]
+        nodes += [start_node(n, parameters, env, logs) for n, parameters in plan if n in apart]
     else:
         nodes = [start_node(name, parameters, env, logs) for name, parameters in plan]
     threads_start: dict[str, float] = {}
@@ -151,7 +159,9 @@ def run_variant(name: str, seconds: float, out: Path) -> dict[str, Any]:
             threads_end = nodes[0].thread_cpu_seconds()
     finally:
         if one_process:
+            # The container first: its source stops, the model then has no input left.
             codes = {"container": stop_node(nodes[0], CONTAINER_STOP_S)}
+            codes |= {node.name: stop_node(node) for node in nodes[1:]}
         else:
             codes = {nodes[-1].name: stop_node(nodes[-1])}
             time.sleep(1.0)
@@ -163,6 +173,8 @@ def run_variant(name: str, seconds: float, out: Path) -> dict[str, Any]:
         for comm, value in threads_end.items()
     }
     cpu = per_node(threads) if one_process else process_cpu
+    for name_apart in apart:
+        cpu[name_apart] = process_cpu[name_apart]
 
     published = json.loads((out / "pressure_source.json").read_text())["published"]
     model = json.loads((out / "caliper_model.json").read_text())

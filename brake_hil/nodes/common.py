@@ -198,22 +198,20 @@ def _never_called(message: Any) -> None:
     del message
 
 
-class PolledInput:
+class PolledSubscription:
     """A raw subscription that its owner's thread takes from directly, with no executor.
 
     :meth:`take_all` returns every message the middleware holds for it, each with rmw's
     message info (``received_timestamp``, ns since the epoch; ``publication_sequence_number``;
     ``publisher_gid``), through the same ``take`` rclpy's executors use. For a node that does
-    all its work on one thread (the GIL is never contended at a deadline, and there is no
-    per-message callback dispatch). The subscription's history (``qos.depth``) must hold
-    what arrives between two takes.
+    all its work on one thread and is spun by no executor (no per-message callback dispatch,
+    the GIL never contended at a deadline). The subscription's history (``qos.depth``) must
+    hold what arrives between two takes.
     """
 
-    def __init__(self, node: Node, spec: TopicSpec, qos: QoSProfile = SAMPLE_QOS) -> None:
-        self.spec = spec
-        self.read = raw_reader(spec)
+    def __init__(self, node: Node, message_type: Any, topic: str, qos: QoSProfile) -> None:
         self._subscription = node.create_subscription(
-            message_class(spec), spec.name, _never_called, qos, raw=True
+            message_type, topic, _never_called, qos, raw=True
         )
 
     def take_all(self) -> list[tuple[bytes, dict[str, Any]]]:
@@ -224,6 +222,15 @@ class PolledInput:
             while (message := handle.take_message(msg_type, True)) is not None:
                 taken.append(message)
         return taken
+
+
+class PolledInput(PolledSubscription):
+    """A :class:`PolledSubscription` of a contract topic, with its value reader (``read``)."""
+
+    def __init__(self, node: Node, spec: TopicSpec, qos: QoSProfile = SAMPLE_QOS) -> None:
+        super().__init__(node, message_class(spec), spec.name, qos)
+        self.spec = spec
+        self.read = raw_reader(spec)
 
 
 def value_reader(spec: TopicSpec) -> Callable[[Any], float]:

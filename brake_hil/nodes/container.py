@@ -17,9 +17,9 @@ ROS arguments before the first ``--node`` go to ``rclpy.init`` and so to every n
 file keyed by node names gives each node its section, as with ``ros2 run``). Nodes are built in
 the order given (readers first, as the launcher starts them); a node may appear once.
 
-Each node runs as in its own process: ``pressure_source`` and ``recorder`` with an executor of
-their own on a background thread (:class:`~brake_hil.nodes.common.BackgroundSpinner`),
-``caliper_model`` and ``comparator`` on their own loop threads. ``realtime_priority`` gives the
+Each node runs as in its own process: ``pressure_source`` with an executor of its own on a
+background thread (:class:`~brake_hil.nodes.common.BackgroundSpinner`), ``caliper_model``,
+``comparator`` and ``recorder`` on their own loop threads. ``realtime_priority`` gives the
 source's worker and the model's loop thread ``SCHED_FIFO`` (per thread, as in their own
 processes), but not the rest of the process: in their own processes they also raise every
 thread of the process (the middleware's), which here would raise the other nodes too. The
@@ -190,12 +190,13 @@ class Member:
         print(f"{NAME}: {self.name} stopped{'' if self.healthy else ' (failed)'}", flush=True)
 
     def _stop(self) -> bool:
-        if self.spinner is None:  # a loop node: healthy unless its loop failed
+        if self.spinner is not None:
+            return self.spinner.stop()
+        if self.name != "recorder":  # a loop node: healthy unless its loop failed
             return bool(self.node.loop_error is None)
-        healthy = self.spinner.stop()
-        if self.name != "recorder":
-            return healthy
         node = self.node
+        node.stop_loop()
+        healthy = bool(node.loop_error is None)
         if node.write_error is None:
             node.drain()
         if node.write_error is not None:
@@ -223,9 +224,7 @@ def _build(name: str, cli_args: Sequence[str]) -> Member:
         return Member(name, ComparatorNode(cli_args), None)
     from brake_hil.nodes.recorder import RecorderNode
 
-    recorder = RecorderNode(cli_args)
-    spinner = common.BackgroundSpinner(recorder, recorder.stop, "recorder-exec")
-    return Member(name, recorder, spinner)
+    return Member(name, RecorderNode(cli_args), None)
 
 
 def _ros_argument_errors() -> tuple[type[BaseException], ...]:

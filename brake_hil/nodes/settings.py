@@ -273,6 +273,9 @@ class RecorderSettings:
     discovery_interval_s: float = parameter(
         0.2, "search the ROS graph for new topics this often", "s"
     )
+    take_interval_s: float = parameter(
+        0.01, "take what the middleware holds for every topic this often", "s"
+    )
     qos_depth: int = parameter(30_000, "history of the reliable subscriptions", "samples")
 
 

@@ -5,10 +5,12 @@
   keeps) and the user has set no Fast DDS profile of their own, it points
   ``FASTDDS_DEFAULT_PROFILES_FILE`` at ``config/fastdds_loopback.xml`` (UDPv4 allowed on
   127.0.0.1 only, builtin transports off, discovery by unicast to 127.0.0.1, no multicast).
-  rmw_fastrtps's ``LOCALHOST`` mode still opens its send sockets on the wildcard address
-  (0.0.0.0, never an external interface's address); they send to loopback peers only. A profile
-  alone would need the range ``SYSTEM_DEFAULT``, which this project's rule (every node runs with
-  ``LOCALHOST``) excludes. ``BRAKE_HIL_DDS_PROFILE=off`` (or ``SUBNET``, or a profile of one's
+  rmw_fastrtps's ``LOCALHOST`` mode (Kilted) adds transports of its own beside the profile's
+  (a shared-memory one and a UDPv4 one with no interface allowlist, built in its code where no
+  profile or environment variable reaches): that UDPv4 transport opens send sockets on the
+  wildcard address and on each external interface's address, which send to the loopback peers
+  only (discovery is unicast to 127.0.0.1, no multicast). A profile alone would need the range
+  ``SYSTEM_DEFAULT``, which this project's rule (every node runs with ``LOCALHOST``) excludes. ``BRAKE_HIL_DDS_PROFILE=off`` (or ``SUBNET``, or a profile of one's
   own) leaves the profile out.
 * :func:`security_problem`: ``ROS_SECURITY_ENABLE=true`` with a Fast DDS built without its
   security plugins (PyPI's) is one line and exit 2 in every node, rather than a traceback or

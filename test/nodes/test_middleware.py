@@ -89,9 +89,10 @@ def test_a_node_with_the_loopback_profile_talks_over_loopback(tmp_path: Path) ->
 
 @pytest.mark.xfail(
     strict=True,
-    reason="issue 10, open: rmw_fastrtps's LOCALHOST mode (the project's rule for every node) "
-    "still binds a send socket on the external interface's address; binding loopback only "
-    "takes the range SYSTEM_DEFAULT with the profile alone",
+    reason="issue 10, blocked: rmw_fastrtps's LOCALHOST mode (the project's rule for every "
+    "node) adds an UDPv4 transport of its own with no interface allowlist beside the profile's, "
+    "in code no profile reaches; its send sockets bind 0.0.0.0 and the external interface's "
+    "address. Binding loopback only takes the range SYSTEM_DEFAULT with the profile alone",
 )
 def test_a_node_binds_only_loopback(tmp_path: Path) -> None:
     sockets, mine = _node_sockets(tmp_path)
