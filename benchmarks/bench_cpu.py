@@ -15,6 +15,10 @@ Variants:
   and the model's loops spinning the last 150 us before each deadline.
 * ``after``: the project's loopback profile (one UDPv4 transport on 127.0.0.1) and the loops
   sleeping to their deadlines (``spin_margin_us`` 0).
+* ``model_apart``: as ``after``, the source, comparator and recorder in one process (the
+  container) and the caliper model in its own.
+* ``two_process``: as ``after``, the source and the model in one process, the comparator and
+  the recorder in another.
 * ``one_process``: as ``after``, the four nodes in one process
   (``python -m brake_hil.nodes.container``: one rclpy context, one DDS participant, Fast DDS
   delivering inside the process). The process's CPU is the total; per node, the CPU of each
@@ -49,9 +53,9 @@ sys.path.insert(0, str(PROJECT))
 
 from brake_hil.app.chain import (  # noqa: E402
     CONTAINER_STOP_S,
+    NodeProcess,
     ros_environment,
-    start_container,
-    start_node,
+    start_layout,
     stop_node,
 )
 from brake_hil.io.recording_reader import list_topics  # noqa: E402
@@ -64,13 +68,9 @@ NODES = ("pressure_source", "caliper_model", "comparator", "recorder")
 VARIANTS: dict[str, dict[str, Any]] = {
     "before": {"env": {"BRAKE_HIL_DDS_PROFILE": "off"}, "loops": {"spin_margin_us": 150}},
     "after": {"env": {}, "loops": {"spin_margin_us": 0}},
-    "one_process": {"env": {}, "loops": {"spin_margin_us": 0}, "one_process": True},
-    "model_apart": {
-        "env": {},
-        "loops": {"spin_margin_us": 0},
-        "one_process": True,
-        "apart": ("caliper_model",),
-    },
+    "one_process": {"env": {}, "loops": {"spin_margin_us": 0}, "layout": "one-process"},
+    "model_apart": {"env": {}, "loops": {"spin_margin_us": 0}, "layout": "model-apart"},
+    "two_process": {"env": {}, "loops": {"spin_margin_us": 0}, "layout": "two-process"},
 }
 THREADS = {
     "source-worker": "pressure_source",
@@ -88,6 +88,15 @@ def per_node(threads: Mapping[str, float]) -> dict[str, float]:
     for comm, value in threads.items():
         grouped[THREADS.get(comm, "shared")] += value
     return grouped
+
+
+def _thread_seconds(containers: list[NodeProcess]) -> dict[str, float]:
+    """CPU time (s) per thread name, summed over the containers."""
+    seconds: dict[str, float] = {}
+    for container in containers:
+        for comm, value in container.thread_cpu_seconds().items():
+            seconds[comm] = seconds.get(comm, 0.0) + value
+    return seconds
 
 
 def _plan(out: Path, loops: Mapping[str, Any]) -> list[tuple[str, dict[str, Any]]]:
@@ -137,44 +146,38 @@ def run_variant(name: str, seconds: float, out: Path) -> dict[str, Any]:
         shutil.rmtree(out)
     logs = out / "logs"
     plan = _plan(out, variant["loops"])
-    one_process = bool(variant.get("one_process"))
-    apart = tuple(variant.get("apart", ()))
-    if one_process:
-        nodes = [start_container([n for n in plan if n[0] not in apart], env, logs)]
-        nodes += [start_node(n, parameters, env, logs) for n, parameters in plan if n in apart]
-    else:
-        nodes = [start_node(name, parameters, env, logs) for name, parameters in plan]
+    layout = variant.get("layout", "processes")
+    nodes = start_layout(plan, env, logs, layout)
+    containers = [node for node in nodes if node.is_container]
     threads_start: dict[str, float] = {}
     threads_end: dict[str, float] = {}
     try:
         time.sleep(8.0)
         start = {n.name: n.cpu_seconds() or 0.0 for n in nodes}
-        if one_process:
-            threads_start = nodes[0].thread_cpu_seconds()
+        threads_start = _thread_seconds(containers)
         began = time.monotonic()
         time.sleep(seconds)
         elapsed = time.monotonic() - began
         end = {n.name: n.cpu_seconds() or 0.0 for n in nodes}
-        if one_process:
-            threads_end = nodes[0].thread_cpu_seconds()
+        threads_end = _thread_seconds(containers)
     finally:
-        if one_process:
-            # The container first: its source stops, the model then has no input left.
-            codes = {"container": stop_node(nodes[0], CONTAINER_STOP_S)}
-            codes |= {node.name: stop_node(node) for node in nodes[1:]}
-        else:
-            codes = {nodes[-1].name: stop_node(nodes[-1])}
-            time.sleep(1.0)
-            for node in reversed(nodes[:-1]):
-                codes[node.name] = stop_node(node)
+        # The process that runs the source first (its container stops the source first):
+        # the model then has no input left; then the rest, last started first.
+        first = next(node for node in nodes if node.runs("pressure_source"))
+        codes = {first.name: stop_node(first, CONTAINER_STOP_S if first.is_container else 10.0)}
+        time.sleep(1.0)
+        for node in reversed(nodes):
+            if node is not first:
+                codes[node.name] = stop_node(node, CONTAINER_STOP_S if node.is_container else 10.0)
     process_cpu = {n: 100.0 * (end[n] - start[n]) / elapsed for n in end}
     threads = {
         comm: 100.0 * (value - threads_start.get(comm, 0.0)) / elapsed
         for comm, value in threads_end.items()
     }
-    cpu = per_node(threads) if one_process else process_cpu
-    for name_apart in apart:
-        cpu[name_apart] = process_cpu[name_apart]
+    cpu = per_node(threads) if containers else {}
+    for node in nodes:
+        if not node.is_container:
+            cpu[node.name] = process_cpu[node.name]
 
     published = json.loads((out / "pressure_source.json").read_text())["published"]
     model = json.loads((out / "caliper_model.json").read_text())

@@ -19,18 +19,19 @@ the probe's latencies, input samples without a prediction, messages lost by the 
 over the soak (from ``/proc``). Goals: period error p99 < 100 us, latency p99 < 1 ms, no input
 without its prediction, nothing lost.
 
-With ``--one-process`` the four chain nodes run in one process
+With ``--layout one-process`` (``--one-process``) the four chain nodes run in one process
 (``python -m brake_hil.nodes.container``; the probe and the reference stay processes of their
 own): the CPU is then the container's, with its threads by name, and
 ``--consumers-priority`` applies to the probe only (the recorder and comparator threads share
 the container, whose other threads run at normal priority; the loops' SCHED_FIFO is per
-thread, as in separate processes).
+thread, as in separate processes). With ``--layout model-apart`` the source, comparator and
+recorder share the container and the caliper model runs in its own process.
 
 Run from the repository root (not in CI; takes ``--minutes`` plus ~15 s)::
 
     .venv/bin/python benchmarks/bench_soak.py --minutes 10 [--realtime-priority 20]
         [--consumers-priority 10] [--out out/bench_soak] [--json FILE] [--keep-bag]
-        [--one-process]
+        [--layout processes|one-process|model-apart]
 
 On a machine other work keeps busy, a normal-priority 1 kHz loop cannot keep time (the
 reference shows it); ``--realtime-priority`` gives the loops SCHED_FIFO, and
@@ -55,11 +56,12 @@ sys.path.insert(0, str(PROJECT))
 
 from brake_hil.app.chain import (  # noqa: E402
     CONTAINER_STOP_S,
+    LAYOUTS,
     NodeProcess,
     choose_domain_id,
     node_available,
     ros_environment,
-    start_container,
+    start_layout,
     start_node,
     stop_node,
 )
@@ -223,6 +225,15 @@ def _bag_counts(bag: Path) -> dict[str, int]:
         return {}
 
 
+def _thread_seconds(containers: list[NodeProcess]) -> dict[str, float]:
+    """CPU time (s) per thread name, summed over the containers."""
+    seconds: dict[str, float] = {}
+    for container in containers:
+        for comm, value in container.thread_cpu_seconds().items():
+            seconds[comm] = seconds.get(comm, 0.0) + value
+    return seconds
+
+
 def soak(
     minutes: float,
     out: Path,
@@ -230,14 +241,14 @@ def soak(
     keep_bag: bool,
     recorder: bool,
     consumers_priority: int = 0,
-    one_process: bool = False,
+    layout: str = "processes",
 ) -> dict[str, Any]:
     """Run the chain for ``minutes`` and collect the figures.
 
     ``realtime_priority``: SCHED_FIFO of the source's and the model's loops (their other
     threads one below); ``consumers_priority``: SCHED_FIFO of the whole recorder, comparator
     and probe processes (0: normal scheduling). The reference timer always runs normally.
-    ``one_process``: the four chain nodes in one process (the container).
+    ``layout``: which chain nodes share a process (:data:`brake_hil.app.chain.LAYOUTS`).
     """
     if out.exists():
         shutil.rmtree(out)
@@ -254,11 +265,11 @@ def soak(
     cpu_end: dict[str, float] = {}
     threads_start: dict[str, float] = {}
     threads_end: dict[str, float] = {}
-    container: NodeProcess | None = None
+    containers: list[NodeProcess] = []
     print(
         f"soak: {minutes:g} min, ROS_DOMAIN_ID {domain}, SCHED_FIFO loops "
         f"{realtime_priority or 'off'}, consumers {consumers_priority or 'off'}"
-        + (", the chain in one process" if one_process else "")
+        + ("" if layout == "processes" else f", layout {layout}")
     )
     waits = [f"{MASTER_CYLINDER_PRESSURE.name}:{subscribers + 1}"]
     waits += [f"{spec.name}:{subscribers}" for spec in MEASURED_OUTPUTS]
@@ -294,10 +305,11 @@ def soak(
     )
     try:
         nodes.append(_start_role("reference", out / "reference.json", env, logs))
-        if one_process:
+        if LAYOUTS[layout] is not None:
             nodes.append(_start_role("probe", out / "probe.json", env, logs, consumers_priority))
-            container = start_container(plan, env, logs)
-            nodes.append(container)
+            nodes.extend(start_layout(plan, env, logs, layout))
+            containers = [n for n in nodes if n.is_container]
+            source = next(n for n in nodes if n.runs("pressure_source"))  # stopped first
         else:
             for name, parameters in plan[:-1]:
                 priority = consumers_priority if name in ("recorder", "comparator") else 0
@@ -307,20 +319,22 @@ def soak(
             nodes.append(source)
         time.sleep(8.0)  # start-up: imports, discovery, the source's wait
         cpu_start = {n.name: n.cpu_seconds() or 0.0 for n in nodes}
-        threads_start = container.thread_cpu_seconds() if container is not None else {}
+        threads_start = _thread_seconds(containers)
         started = time.monotonic()
         time.sleep(minutes * 60.0)
         elapsed = time.monotonic() - started
         cpu_end = {n.name: n.cpu_seconds() or 0.0 for n in nodes}
-        threads_end = container.thread_cpu_seconds() if container is not None else {}
+        threads_end = _thread_seconds(containers)
     finally:
         exit_codes = {}
         if source is not None:
-            exit_codes[source.name] = stop_node(source)
+            exit_codes[source.name] = stop_node(
+                source, CONTAINER_STOP_S if source.is_container else 10.0
+            )
             time.sleep(1.0)  # in flight: the last predictions, the recorder's queues
         for node in reversed(nodes):
             if node.name not in exit_codes:
-                timeout_s = CONTAINER_STOP_S if node is container else 10.0
+                timeout_s = CONTAINER_STOP_S if node.is_container else 10.0
                 exit_codes[node.name] = stop_node(node, timeout_s)
     cpu = {
         name: 100.0 * (cpu_end[name] - cpu_start.get(name, 0.0)) / elapsed
@@ -347,7 +361,7 @@ def soak(
         "comparator": _read(out / "comparator.json"),
         "cpu_percent": cpu,
         "container_threads_cpu_percent": threads,
-        "one_process": one_process,
+        "layout": layout,
         "exit_codes": exit_codes,
     }
     if has_recorder and (out / "soak" / "metadata.yaml").is_file():
@@ -461,9 +475,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--keep-bag", action="store_true", help="keep the recorder's MCAP")
     parser.add_argument("--no-recorder", action="store_true")
     parser.add_argument(
+        "--layout",
+        choices=tuple(LAYOUTS),
+        default="processes",
+        help="which chain nodes share a process (as python -m brake_hil.nodes.chain --layout)",
+    )
+    parser.add_argument(
         "--one-process",
-        action="store_true",
-        help="the four chain nodes in one process (python -m brake_hil.nodes.container)",
+        action="store_const",
+        const="one-process",
+        dest="layout",
+        help="the same as --layout one-process",
     )
     parser.add_argument("--role", choices=("probe", "reference"), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
@@ -480,7 +502,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         args.keep_bag,
         not args.no_recorder,
         args.consumers_priority,
-        args.one_process,
+        args.layout,
     )
     report(result)
     if args.json:

@@ -11,14 +11,17 @@ comparator's run summary, the model's timing, where the MCAP is, and the recorde
 checked against the batch model on the recorded input; it prints nothing (the command line,
 ``python -m brake_hil.nodes.chain``, is :mod:`brake_hil.cli.chain`).
 
-With ``one_process`` the same four nodes run in one process instead
-(``python -m brake_hil.nodes.container``, one rclpy context: Fast DDS delivers between them
-inside the process), each with the same parameters from its own params file, started with the
-same environment; the launcher waits for the source's statistics file (written as its replay
-ends) instead of the source's exit, and stops the container with SIGINT, which stops the nodes
-in the same order (the recorder once it has caught up). Exit codes and CPU time are then the
-container's (``ChainResult.exit_codes["container"]``). Less CPU, worse loop timing (the GIL is
-shared): see :mod:`brake_hil.nodes.container`.
+The ``layout`` says which nodes share a process (:data:`LAYOUTS`): ``processes`` (each its
+own, as above), ``one-process`` (the four in one process, ``python -m
+brake_hil.nodes.container``: one rclpy context, Fast DDS delivers between them inside the
+process) or ``model-apart`` (the source, comparator and recorder in one process, the caliper
+model in its own: its 1 kHz loop shares no GIL, the other three no loopback traffic). Each node
+gets the same parameters from its own params file, started with the same environment; with a
+container the launcher waits for the source's statistics file (written as its replay ends)
+instead of the source's exit, and stops the container with SIGINT, which stops its nodes in the
+same order (the recorder once it has caught up). Exit codes and CPU time are then the
+container's (``ChainResult.exit_codes["container"]``). CPU and loop timing of each layout: the
+README (``benchmarks/bench_cpu.py``, ``benchmarks/bench_soak.py``).
 
 This module imports no rclpy: the nodes run in their own processes. The recorder is
 optional: without ``brake_hil/nodes/recorder.py`` the chain runs without it and says so.
@@ -58,6 +61,7 @@ from brake_hil.topics import (
 
 __all__ = [
     "DEFAULT_MODEL",
+    "LAYOUTS",
     "DEFAULT_RECORDING",
     "PROJECT",
     "ChainResult",
@@ -70,6 +74,7 @@ __all__ = [
     "run_can_chain",
     "run_chain",
     "start_container",
+    "start_layout",
     "start_node",
     "stop_node",
 ]
@@ -79,6 +84,24 @@ DEFAULT_RECORDING = PROJECT / "bags" / "one_washer_lti"
 DEFAULT_MODEL = PROJECT / "config" / "rig_default.yaml"
 CONTAINER = "container"
 """The name of the one-process chain's process (``brake_hil.nodes.container``)."""
+NODE_ORDER = ("recorder", "comparator", "caliper_model", "pressure_source")
+"""The chain's nodes in start order (readers before their writers)."""
+REALTIME_GROUP = "container-realtime"
+CONSUMERS_GROUP = "container-consumers"
+LAYOUTS: dict[str, dict[str, str]] = {
+    "processes": {},
+    "one-process": dict.fromkeys(NODE_ORDER, CONTAINER),
+    "model-apart": dict.fromkeys(("recorder", "comparator", "pressure_source"), CONTAINER),
+    "two-process": {
+        "recorder": CONSUMERS_GROUP,
+        "comparator": CONSUMERS_GROUP,
+        "caliper_model": REALTIME_GROUP,
+        "pressure_source": REALTIME_GROUP,
+    },
+}
+"""Which nodes share a process: node name -> the container's process name; a node not named
+runs in its own process. ``two-process``: the source and the model (the 1 kHz loops) in one,
+the comparator and the recorder in another."""
 CONTAINER_STOP_S = 100.0
 """How long the launcher gives the container to stop after SIGINT (s): the source's and the
 model's wait for acknowledgements (8 s each) and the recorder's catch-up (at most 60 s)."""
@@ -122,6 +145,17 @@ class NodeProcess:
     name: str
     process: subprocess.Popen[bytes]
     log: Path
+    nodes: tuple[str, ...] = ()
+    """The nodes a container runs (empty: the process is the node ``name``)."""
+
+    @property
+    def is_container(self) -> bool:
+        """True for a ``brake_hil.nodes.container`` process."""
+        return bool(self.nodes)
+
+    def runs(self, node: str) -> bool:
+        """True when ``node`` runs in this process."""
+        return node in self.nodes if self.nodes else node == self.name
 
     def returncode(self) -> int | None:
         """Exit status, None while running."""
@@ -205,18 +239,19 @@ def start_container(
     env: Mapping[str, str],
     workdir: Path,
     fifo_priority: int = 0,
+    name: str = CONTAINER,
 ) -> NodeProcess:
     """Start ``brake_hil.nodes.container`` running ``nodes`` (name, parameters), in that order.
 
     Each node's parameters go to its own params file, as :func:`start_node` writes them; the
-    process is started as :func:`start_node` starts a node (own session, log
-    ``container.log``). ``fifo_priority`` > 0: the whole process under ``SCHED_FIFO``.
+    process is started as :func:`start_node` starts a node (own session, log ``NAME.log``).
+    ``fifo_priority`` > 0: the whole process under ``SCHED_FIFO``.
     """
     command = [sys.executable, "-m", f"brake_hil.nodes.{CONTAINER}"]
-    for name, parameters in nodes:
-        params = _params_file(name, parameters, workdir)
-        command += ["--node", name, "--ros-args", "--params-file", str(params)]
-    log = workdir / f"{CONTAINER}.log"
+    for node, parameters in nodes:
+        params = _params_file(node, parameters, workdir)
+        command += ["--node", node, "--ros-args", "--params-file", str(params)]
+    log = workdir / f"{name}.log"
     with log.open("wb") as stream:
         process = subprocess.Popen(
             command,
@@ -226,7 +261,39 @@ def start_container(
             start_new_session=True,
             preexec_fn=(lambda: set_realtime_priority(fifo_priority)) if fifo_priority else None,
         )
-    return NodeProcess(CONTAINER, process, log)
+    return NodeProcess(name, process, log, tuple(node for node, _ in nodes))
+
+
+def start_layout(
+    plan: Sequence[tuple[str, Mapping[str, Any]]],
+    env: Mapping[str, str],
+    workdir: Path,
+    layout: str = "processes",
+    fifo_priority: Mapping[str, int] | None = None,
+) -> list[NodeProcess]:
+    """Start the nodes of ``plan`` (name, parameters; readers first) as ``layout`` says.
+
+    A process is started when its first node's turn in ``plan`` comes (a container with all
+    its nodes, in plan order). ``fifo_priority``: per node name, a ``SCHED_FIFO`` priority for
+    a node in its own process (:func:`start_node`; containers start normally). Returns the
+    processes in start order.
+
+    Raises:
+        ValueError: an unknown layout.
+    """
+    if layout not in LAYOUTS:
+        raise ValueError(f"unknown layout {layout!r} (layouts: {', '.join(LAYOUTS)})")
+    priorities = dict(fifo_priority or {})
+    groups = LAYOUTS[layout]
+    processes: list[NodeProcess] = []
+    for name, parameters in plan:
+        group = groups.get(name)
+        if group is None:
+            processes.append(start_node(name, parameters, env, workdir, priorities.get(name, 0)))
+        elif not any(process.name == group for process in processes):
+            members = [(node, values) for node, values in plan if groups.get(node) == group]
+            processes.append(start_container(members, env, workdir, name=group))
+    return processes
 
 
 def stop_node(node: NodeProcess, timeout_s: float = 10.0) -> int:
@@ -324,7 +391,7 @@ def run_chain(
     progress: Notice | None = None,
     recorder: bool = True,
     realtime_priority: int = 0,
-    one_process: bool = False,
+    layout: str = "processes",
 ) -> ChainResult:
     """Run the chain on ``recording`` once; see the module docstring.
 
@@ -338,7 +405,7 @@ def run_chain(
         recorder: record the run to MCAP (when the recorder node exists).
         realtime_priority: ``SCHED_FIFO`` priority of the source's and the model's loop
             threads (0: none).
-        one_process: the four nodes in one process (:mod:`brake_hil.nodes.container`).
+        layout: which nodes share a process (:data:`LAYOUTS`).
 
     Returns:
         What the nodes left: summaries, exit codes, CPU times, the checked recording.
@@ -347,6 +414,8 @@ def run_chain(
         BrakeHilError: a bad recording or model file (before any node starts).
     """
     say = progress or _ignore
+    if layout not in LAYOUTS:
+        raise BrakeHilError(f"unknown layout {layout!r} (layouts: {', '.join(LAYOUTS)})")
     source = read_recording(recording, required=(MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS))
     mean_pressure = float(np.mean(source.master_cylinder_pressure))
     load_model(model_file, mean_pressure)  # a bad model file fails here, with one line
@@ -366,7 +435,8 @@ def run_chain(
     wall_s = 0.0
     say(
         f"chain on {recording} ({length_s:.1f} s at rate {rate:g}), model {model_file}, "
-        f"ROS_DOMAIN_ID {env['ROS_DOMAIN_ID']}" + (", one process" if one_process else "")
+        f"ROS_DOMAIN_ID {env['ROS_DOMAIN_ID']}"
+        + ("" if layout == "processes" else f", layout {layout}")
     )
     # In start order: readers before their writers (the launcher stops them in reverse).
     plan: list[tuple[str, dict[str, Any]]] = []
@@ -402,16 +472,16 @@ def run_chain(
     source_done = out_dir / "pressure_source.json"  # written as the source ends
     source_done.unlink(missing_ok=True)
     try:
-        if one_process:
-            container = start_container(plan, env, logs)
-            nodes.append(container)
+        if "pressure_source" in LAYOUTS[layout]:  # the source runs in a container
+            nodes.extend(start_layout(plan, env, logs, layout))
+            container = next(node for node in nodes if node.runs("pressure_source"))
             started = time.monotonic()
             if not _wait_for_file(source_done, container, length_s / rate + 45.0):
                 code = container.returncode()
                 say(
-                    "pressure_source did not finish in time: stopping the container"
+                    f"pressure_source did not finish in time: stopping {container.name}"
                     if code is None
-                    else f"the container exited with status {code} before the source finished"
+                    else f"{container.name} exited with status {code} before the source finished"
                 )
         else:
             for name, parameters in plan:
@@ -501,7 +571,7 @@ def _stop_all(nodes: list[NodeProcess], stops: _Stops, bag: Path | None = None) 
         cpu = node.cpu_seconds()
         if cpu is not None:
             stops.cpu_s[node.name] = cpu
-        timeout_s = CONTAINER_STOP_S if node.name == CONTAINER else 10.0
+        timeout_s = CONTAINER_STOP_S if node.is_container else 10.0
         stops.exit_codes[node.name] = stop_node(node, timeout_s)
 
 

@@ -1,7 +1,7 @@
 """The command line of the node-chain launcher: ``python -m brake_hil.nodes.chain``.
 
-Parses the options, runs :func:`brake_hil.app.chain.run_chain` (with ``--one-process`` the
-four nodes in one process, :mod:`brake_hil.nodes.container`; or
+Parses the options, runs :func:`brake_hil.app.chain.run_chain` (``--layout``: which nodes share
+a process, :mod:`brake_hil.nodes.container`; ``--one-process`` the four in one; or
 :func:`~brake_hil.app.chain.run_can_chain` with ``--can-emulator``), prints its notices as
 they come and then the comparator's run summary, the model's timing and where the MCAP is.
 Exit status: 0; 1 when a node exited with an error, or when an input sample was lost or left
@@ -19,6 +19,7 @@ from brake_hil.app.chain import (
     CONTAINER,
     DEFAULT_MODEL,
     DEFAULT_RECORDING,
+    LAYOUTS,
     PROJECT,
     ChainResult,
     run_can_chain,
@@ -30,7 +31,7 @@ from brake_hil.topics import OUTPUT_CHANNELS
 __all__ = ["build_parser", "main", "result_lines"]
 
 DESCRIPTION = (
-    "The node chain as separate processes (or one, --one-process): source -> caliper model -> "
+    "The node chain as separate processes (or fewer, --layout): source -> caliper model -> "
     "comparator -> recorder."
 )
 
@@ -77,11 +78,20 @@ def build_parser() -> argparse.ArgumentParser:
         help="SCHED_FIFO priority of the source's and the model's loop threads (0: none)",
     )
     parser.add_argument(
+        "--layout",
+        choices=tuple(LAYOUTS),
+        default="processes",
+        help="which nodes share a process: processes (each its own), one-process (the four in "
+        "python -m brake_hil.nodes.container: the least CPU, but the model's loop shares the "
+        "GIL: period error and latency of milliseconds at p99), model-apart (source, "
+        "comparator and recorder in one process, the caliper model in its own)",
+    )
+    parser.add_argument(
         "--one-process",
-        action="store_true",
-        help="run the four nodes in one process (python -m brake_hil.nodes.container: one "
-        "rclpy context, Fast DDS delivers inside the process): under half the CPU, but the "
-        "model's loop shares the GIL (period error and latency of milliseconds at p99)",
+        action="store_const",
+        const="one-process",
+        dest="layout",
+        help="the same as --layout one-process",
     )
     parser.add_argument(
         "--can-emulator",
@@ -101,8 +111,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """``python -m brake_hil.nodes.chain``; returns the exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    if args.one_process and args.can_emulator:
-        parser.error("--one-process runs a replay; it does not combine with --can-emulator")
+    if args.layout != "processes" and args.can_emulator:
+        parser.error("--layout runs a replay; it does not combine with --can-emulator")
     try:
         if args.can_emulator:
             out = (
@@ -123,7 +133,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 progress=print,
                 recorder=not args.no_recorder,
                 realtime_priority=args.realtime_priority,
-                one_process=args.one_process,
+                layout=args.layout,
             )
     except BrakeHilError as err:
         print(f"chain: error: {err}", file=sys.stderr)
@@ -169,7 +179,7 @@ def result_lines(result: ChainResult) -> list[str]:
             f"{counters['overruns']} overruns"
         )
     if result.cpu_s:
-        per = "of the one process" if list(result.cpu_s) == [CONTAINER] else "per node"
+        per = "of the one process" if list(result.cpu_s) == [CONTAINER] else "per process"
         lines.append(
             f"CPU time (s) {per}: "
             + ", ".join(f"{name} {seconds:.1f}" for name, seconds in result.cpu_s.items())

@@ -12,7 +12,8 @@ log time is its receive time (the middleware's ``received_timestamp``, system cl
 take's time where the middleware gives none), never earlier than the topic's previous
 message (a reliable sample repaired after a gap arrives after newer ones but is delivered, and
 recorded, in the topic's order); ``header.stamp`` stays inside the message. A message
-received after a take began waits for the next take, so log times never go backwards. SIGINT/SIGTERM stop the loop, record what the middleware
+received after a take began waits for the next take, so log times never go backwards.
+SIGINT/SIGTERM stop the loop, record what the middleware
 still holds (until 0.05 s without a message, at most 0.5 s: under steady traffic up to 0.5 s
 more is recorded), then finish the files.
 

@@ -10,7 +10,8 @@
   profile or environment variable reaches): that UDPv4 transport opens send sockets on the
   wildcard address and on each external interface's address, which send to the loopback peers
   only (discovery is unicast to 127.0.0.1, no multicast). A profile alone would need the range
-  ``SYSTEM_DEFAULT``, which this project's rule (every node runs with ``LOCALHOST``) excludes. ``BRAKE_HIL_DDS_PROFILE=off`` (or ``SUBNET``, or a profile of one's
+  ``SYSTEM_DEFAULT``, which this project's rule (every node runs with ``LOCALHOST``) excludes.
+  ``BRAKE_HIL_DDS_PROFILE=off`` (or ``SUBNET``, or a profile of one's
   own) leaves the profile out.
 * :func:`security_problem`: ``ROS_SECURITY_ENABLE=true`` with a Fast DDS built without its
   security plugins (PyPI's) is one line and exit 2 in every node, rather than a traceback or

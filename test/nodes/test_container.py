@@ -1,9 +1,10 @@
 """The chain's four nodes in one process (``python -m brake_hil.nodes.container``).
 
 Real nodes, real DDS on loopback (the launcher's environment: ``LOCALHOST`` and the project's
-profile), on a 4 s slice of ``bags/one_washer_lti``: the one-process chain
-(``python -m brake_hil.nodes.chain --one-process``) predicts and records every sample, exits 0
-and leaves an MCAP that reads back; bad parameters of one node end the container with exit 2
+profile), on a 4 s slice of ``bags/one_washer_lti``: the chain with nodes
+sharing processes (``python -m brake_hil.nodes.chain --one-process``, ``--layout model-apart``,
+``--layout two-process``) predicts and records every sample, exits 0 and leaves an MCAP that
+reads back; bad parameters of one node end the container with exit 2
 and one line, after the nodes already built were closed; SIGTERM mid-run stops every node in
 order and loses nothing the source had published. Counts and contracts only, with generous
 deadlines (never timing: the CI runner is a busy 2-core machine).
@@ -70,11 +71,22 @@ def _mcap_counts(bag: Path) -> dict[str, int]:
     return counts
 
 
-def test_the_one_process_chain_predicts_and_records_every_sample(
-    short_recording: Path, tmp_path: Path
+@pytest.mark.parametrize(
+    ("options", "processes"),
+    [
+        (["--one-process"], {"container": ("pressure_source", "caliper_model")}),
+        (["--layout", "model-apart"], {"container": ("pressure_source",), "caliper_model": ()}),
+        (
+            ["--layout", "two-process"],
+            {"container-realtime": ("pressure_source",), "container-consumers": ("recorder",)},
+        ),
+    ],
+)
+def test_a_chain_with_shared_processes_predicts_and_records_every_sample(
+    short_recording: Path, tmp_path: Path, options: list[str], processes: dict[str, tuple[str]]
 ) -> None:
     command = [sys.executable, "-m", "brake_hil.nodes.chain", str(short_recording)]
-    command += ["--out", str(tmp_path), "--one-process"]
+    command += ["--out", str(tmp_path), *options]
     done = subprocess.run(
         command, env=ros_environment(), capture_output=True, text=True, timeout=300, check=False
     )
@@ -84,9 +96,14 @@ def test_the_one_process_chain_predicts_and_records_every_sample(
         f"predicted; {SAMPLES} inputs and {SAMPLES} predictions recorded (0 lost)"
     )
     assert line in done.stdout, done.stdout + done.stderr
-    assert "CPU time (s) of the one process: container" in done.stdout
-    assert (tmp_path / "logs" / "container.log").is_file()
-    assert not (tmp_path / "logs" / "caliper_model.log").exists()  # no node process of its own
+    cpu = next(text for text in done.stdout.splitlines() if text.startswith("CPU time (s)"))
+    assert sorted(re.findall(r"([\w-]+) \d+\.\d", cpu)) == sorted(processes), cpu
+    logs = {path.stem for path in (tmp_path / "logs").glob("*.log")}
+    assert logs == set(processes), logs  # one log per process: the shared nodes have none
+    for process, members in processes.items():
+        text = (tmp_path / "logs" / f"{process}.log").read_text()
+        for member in members:  # the container says it ran the node
+            assert re.search(rf"running .*{member}", text), (process, member, text[-2000:])
     comparator = json.loads((tmp_path / "comparator.json").read_text())
     assert all(entry["paired"] == SAMPLES for entry in comparator["metrics"].values())
     assert comparator["metrics"]["p_b"]["cycles"] > 0
