@@ -25,12 +25,14 @@ processes), but not the rest of the process: in their own processes they also ra
 thread of the process (the middleware's), which here would raise the other nodes too. The
 threads share one GIL: a priority orders the kernel's scheduling, not who holds the GIL.
 
-The trade-off (``benchmarks/bench_cpu.py --one-process``, ``benchmarks/bench_soak.py
---one-process``): the four nodes take less than half the CPU of four processes (no loopback
-UDP between them), but the model's loop waits for the GIL behind the recorder's callbacks, the
-comparator's takes and the source's publishes (CPython hands the GIL over after its 5 ms
-switch interval), so its period error and latency are milliseconds at p99, with or without
-``SCHED_FIFO``: where the 1 kHz loop's timing goals matter, run the nodes as processes.
+The trade-off (``benchmarks/bench_cpu.py``, ``benchmarks/bench_soak.py --layout``; figures in
+the README): nodes in one process take far less CPU than as processes (no loopback UDP between
+them), but a loop waits for the GIL behind the other nodes' Python work (CPython hands the GIL
+over after its 5 ms switch interval), so with all four nodes in one process the model's period
+error and latency are milliseconds at p99, with or without ``SCHED_FIFO``. The launcher's
+layouts (``python -m brake_hil.nodes.chain --layout``) put some nodes in a container and the
+rest in processes of their own (``two-process``: the two 1 kHz loops in one container, the
+comparator and the recorder in another).
 
 A node whose work ends by itself (the source at the end of a replay with ``exit_at_end``, a
 loop that failed, a recorder whose write failed) is closed and destroyed at once, as its

@@ -170,8 +170,24 @@ def values_by_topic(bag: Path) -> dict[str, list[float]]:
     return found
 
 
+def log_times_in_file_order(bag: Path) -> list[int]:
+    """The log time of every message as the files hold them (not sorted by the reader)."""
+    times: list[int] = []
+    for name in listed_files(bag):
+        with (bag / name).open("rb") as stream:
+            reader = make_reader(stream)
+            times += [m.log_time for _, _, m in reader.iter_messages(log_time_order=False)]
+    return times
+
+
 def check_recording(bag: Path, topics: Sequence[str], count: int) -> None:
-    """Every topic holds samples 0..count-1 in order, and read_recording agrees."""
+    """Every topic holds samples 0..count-1 in order, and read_recording agrees.
+
+    The recorder writes in receive-time order across topics: log times never go back.
+    """
+    times = log_times_in_file_order(bag)
+    assert len(times) >= count * len(topics)
+    assert all(b >= a for a, b in zip(times, times[1:])), "log times go backwards"
     found = values_by_topic(bag)
     assert sorted(found) == sorted(topics)
     for topic in topics:
