@@ -53,10 +53,10 @@ sys.path.insert(0, str(PROJECT))
 
 from brake_hil.app.chain import (  # noqa: E402
     CONTAINER_STOP_S,
-    NodeProcess,
     ros_environment,
     start_layout,
     stop_node,
+    thread_cpu_seconds,
 )
 from brake_hil.io.recording_reader import list_topics  # noqa: E402
 from brake_hil.topics import MASTER_CYLINDER_PRESSURE, PREDICTED_OUTPUTS  # noqa: E402
@@ -88,15 +88,6 @@ def per_node(threads: Mapping[str, float]) -> dict[str, float]:
     for comm, value in threads.items():
         grouped[THREADS.get(comm, "shared")] += value
     return grouped
-
-
-def _thread_seconds(containers: list[NodeProcess]) -> dict[str, float]:
-    """CPU time (s) per thread name, summed over the containers."""
-    seconds: dict[str, float] = {}
-    for container in containers:
-        for comm, value in container.thread_cpu_seconds().items():
-            seconds[comm] = seconds.get(comm, 0.0) + value
-    return seconds
 
 
 def _plan(out: Path, loops: Mapping[str, Any]) -> list[tuple[str, dict[str, Any]]]:
@@ -154,12 +145,12 @@ def run_variant(name: str, seconds: float, out: Path) -> dict[str, Any]:
     try:
         time.sleep(8.0)
         start = {n.name: n.cpu_seconds() or 0.0 for n in nodes}
-        threads_start = _thread_seconds(containers)
+        threads_start = thread_cpu_seconds(containers)
         began = time.monotonic()
         time.sleep(seconds)
         elapsed = time.monotonic() - began
         end = {n.name: n.cpu_seconds() or 0.0 for n in nodes}
-        threads_end = _thread_seconds(containers)
+        threads_end = thread_cpu_seconds(containers)
     finally:
         # The process that runs the source first (its container stops the source first):
         # the model then has no input left; then the rest, last started first.

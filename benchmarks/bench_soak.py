@@ -64,6 +64,7 @@ from brake_hil.app.chain import (  # noqa: E402
     start_layout,
     start_node,
     stop_node,
+    thread_cpu_seconds,
 )
 from brake_hil.runtime import Histogram  # noqa: E402
 from brake_hil.topics import (  # noqa: E402
@@ -225,15 +226,6 @@ def _bag_counts(bag: Path) -> dict[str, int]:
         return {}
 
 
-def _thread_seconds(containers: list[NodeProcess]) -> dict[str, float]:
-    """CPU time (s) per thread name, summed over the containers."""
-    seconds: dict[str, float] = {}
-    for container in containers:
-        for comm, value in container.thread_cpu_seconds().items():
-            seconds[comm] = seconds.get(comm, 0.0) + value
-    return seconds
-
-
 def soak(
     minutes: float,
     out: Path,
@@ -319,12 +311,12 @@ def soak(
             nodes.append(source)
         time.sleep(8.0)  # start-up: imports, discovery, the source's wait
         cpu_start = {n.name: n.cpu_seconds() or 0.0 for n in nodes}
-        threads_start = _thread_seconds(containers)
+        threads_start = thread_cpu_seconds(containers)
         started = time.monotonic()
         time.sleep(minutes * 60.0)
         elapsed = time.monotonic() - started
         cpu_end = {n.name: n.cpu_seconds() or 0.0 for n in nodes}
-        threads_end = _thread_seconds(containers)
+        threads_end = thread_cpu_seconds(containers)
     finally:
         exit_codes = {}
         if source is not None:

@@ -77,6 +77,7 @@ __all__ = [
     "start_layout",
     "start_node",
     "stop_node",
+    "thread_cpu_seconds",
 ]
 
 PROJECT = Path(__file__).resolve().parents[2]
@@ -232,6 +233,15 @@ def _params_file(name: str, parameters: Mapping[str, Any], workdir: Path) -> Pat
         yaml.safe_dump({name: {"ros__parameters": dict(parameters)}}), encoding="utf-8"
     )
     return params
+
+
+def thread_cpu_seconds(processes: Sequence[NodeProcess]) -> dict[str, float]:
+    """CPU time (s) of each thread name so far, summed over ``processes`` (their ``/proc``)."""
+    seconds: dict[str, float] = {}
+    for process in processes:
+        for comm, value in process.thread_cpu_seconds().items():
+            seconds[comm] = seconds.get(comm, 0.0) + value
+    return seconds
 
 
 def start_container(
