@@ -53,3 +53,28 @@ def test_a_generic_form_that_explains_far_more_marks_a_stand_in() -> None:
     outcome = form_check(BASELINE, hypothesis, residual)  # type: ignore[arg-type]
     assert not outcome.passed and "static nonlinear map of F_k" in outcome.finding
     assert form_check(BASELINE, hypothesis, None).passed
+
+
+def test_the_farthest_rig_value_is_counted_from_the_rig_file_in_tolerance_sigmas() -> None:
+    """A freed baseline's factors multiply the calibrated values; sigmas are the prior's."""
+    from types import SimpleNamespace
+
+    from brake_hil.diagnosis.physics_checks import OUT_OF_TOLERANCE_SIGMAS, farthest_rig_value
+
+    calibration = SimpleNamespace(
+        multipliers={"hose_stiffness": 1.1, "valve_resistance": 0.8},
+        sigmas={"hose_stiffness": 0.1, "valve_resistance": 0.4},
+    )
+    names = ("hose_compliance_ratio", "calibration.hose_stiffness", "calibration.valve_resistance")
+    theta = np.array([5.0, 1.3, 1.0])  # the candidate's own parameter is no rig value
+    freed = Fit((), theta, names, ("-", "x", "x"), 1.0, 1.0, {})
+    name, sigmas = farthest_rig_value(calibration, freed)  # type: ignore[arg-type]
+    assert name == "hose_stiffness"
+    assert sigmas == np.log(1.1 * 1.3) / 0.1  # 3.58: within tolerance
+    assert sigmas < OUT_OF_TOLERANCE_SIGMAS
+    further = Fit((), np.array([5.0, 1.7, 0.5]), names, ("-", "x", "x"), 1.0, 1.0, {})
+    name, sigmas = farthest_rig_value(calibration, further)  # type: ignore[arg-type]
+    assert name == "hose_stiffness" and sigmas > OUT_OF_TOLERANCE_SIGMAS  # 6.26 against 2.29
+    # a value moved down counts as far as one moved up
+    down = Fit((), np.array([5.0, 1.0, 0.15]), names, ("-", "x", "x"), 1.0, 1.0, {})
+    assert farthest_rig_value(calibration, down)[0] == "valve_resistance"  # type: ignore[arg-type]
