@@ -66,6 +66,7 @@ from brake_hil.app.chain import (  # noqa: E402
     stop_node,
     thread_cpu_seconds,
 )
+from brake_hil.cli.chain import add_layout_arguments  # noqa: E402
 from brake_hil.runtime import Histogram  # noqa: E402
 from brake_hil.topics import (  # noqa: E402
     MASTER_CYLINDER_PRESSURE,
@@ -297,7 +298,7 @@ def soak(
     )
     try:
         nodes.append(_start_role("reference", out / "reference.json", env, logs))
-        if LAYOUTS[layout] is not None:
+        if LAYOUTS[layout]:  # some nodes share a process
             nodes.append(_start_role("probe", out / "probe.json", env, logs, consumers_priority))
             nodes.extend(start_layout(plan, env, logs, layout))
             containers = [n for n in nodes if n.is_container]
@@ -466,19 +467,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--json", type=Path, help="write the figures here too")
     parser.add_argument("--keep-bag", action="store_true", help="keep the recorder's MCAP")
     parser.add_argument("--no-recorder", action="store_true")
-    parser.add_argument(
-        "--layout",
-        choices=tuple(LAYOUTS),
-        default="processes",
-        help="which chain nodes share a process (as python -m brake_hil.nodes.chain --layout)",
-    )
-    parser.add_argument(
-        "--one-process",
-        action="store_const",
-        const="one-process",
-        dest="layout",
-        help="the same as --layout one-process",
-    )
+    add_layout_arguments(parser)
     parser.add_argument("--role", choices=("probe", "reference"), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.role == "probe":

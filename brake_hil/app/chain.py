@@ -214,16 +214,7 @@ def start_node(
         "--params-file",
         str(params),
     ]
-    with log.open("wb") as stream:
-        process = subprocess.Popen(
-            command,
-            env=dict(env),
-            stdout=stream,
-            stderr=subprocess.STDOUT,
-            start_new_session=True,
-            preexec_fn=(lambda: set_realtime_priority(fifo_priority)) if fifo_priority else None,
-        )
-    return NodeProcess(name, process, log)
+    return NodeProcess(name, _spawn(command, env, log, fifo_priority), log)
 
 
 def _params_file(name: str, parameters: Mapping[str, Any], workdir: Path) -> Path:
@@ -262,16 +253,23 @@ def start_container(
         params = _params_file(node, parameters, workdir)
         command += ["--node", node, "--ros-args", "--params-file", str(params)]
     log = workdir / f"{name}.log"
+    process = _spawn(command, env, log, fifo_priority)
+    return NodeProcess(name, process, log, tuple(node for node, _ in nodes))
+
+
+def _spawn(
+    command: Sequence[str], env: Mapping[str, str], log: Path, fifo_priority: int
+) -> subprocess.Popen[bytes]:
+    """Start ``command`` in its own session, output to ``log``, ``SCHED_FIFO`` if > 0."""
     with log.open("wb") as stream:
-        process = subprocess.Popen(
-            command,
+        return subprocess.Popen(
+            list(command),
             env=dict(env),
             stdout=stream,
             stderr=subprocess.STDOUT,
             start_new_session=True,
             preexec_fn=(lambda: set_realtime_priority(fifo_priority)) if fifo_priority else None,
         )
-    return NodeProcess(name, process, log, tuple(node for node, _ in nodes))
 
 
 def start_layout(

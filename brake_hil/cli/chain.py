@@ -28,7 +28,7 @@ from brake_hil.app.chain import (
 from brake_hil.errors import BrakeHilError
 from brake_hil.topics import OUTPUT_CHANNELS
 
-__all__ = ["build_parser", "main", "result_lines"]
+__all__ = ["add_layout_arguments", "build_parser", "main", "result_lines"]
 
 DESCRIPTION = (
     "The node chain as separate processes (or fewer, --layout): source -> caliper model -> "
@@ -77,22 +77,7 @@ def build_parser() -> argparse.ArgumentParser:
         default=0,
         help="SCHED_FIFO priority of the source's and the model's loop threads (0: none)",
     )
-    parser.add_argument(
-        "--layout",
-        choices=tuple(LAYOUTS),
-        default="processes",
-        help="which nodes share a process: processes (each its own), one-process (the four in "
-        "python -m brake_hil.nodes.container: the least CPU, but the model's loop shares the "
-        "GIL: period error and latency of milliseconds at p99), model-apart (source, "
-        "comparator and recorder in one process, the caliper model in its own)",
-    )
-    parser.add_argument(
-        "--one-process",
-        action="store_const",
-        const="one-process",
-        dest="layout",
-        help="the same as --layout one-process",
-    )
+    add_layout_arguments(parser)
     parser.add_argument(
         "--can-emulator",
         action="store_true",
@@ -105,6 +90,27 @@ def build_parser() -> argparse.ArgumentParser:
         help="with --can-emulator: a virtual-rig effect, NAME[=STRENGTH]",
     )
     return parser
+
+
+def add_layout_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--layout`` (which nodes share a process) and ``--one-process``, into ``args.layout``."""
+    parser.add_argument(
+        "--layout",
+        choices=tuple(LAYOUTS),
+        default="processes",
+        help="which nodes share a process: processes (each its own), two-process (source and "
+        "model in one, comparator and recorder in another), model-apart (source, comparator "
+        "and recorder in one process, the caliper model in its own), one-process (the four "
+        "in python -m brake_hil.nodes.container: the least CPU, but the model's loop shares "
+        "the GIL: period error and latency of milliseconds at p99)",
+    )
+    parser.add_argument(
+        "--one-process",
+        action="store_const",
+        const="one-process",
+        dest="layout",
+        help="the same as --layout one-process",
+    )
 
 
 def main(argv: Sequence[str] | None = None) -> int:

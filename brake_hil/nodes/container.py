@@ -194,18 +194,9 @@ class Member:
     def _stop(self) -> bool:
         if self.spinner is not None:
             return self.spinner.stop()
-        if self.name != "recorder":  # a loop node: healthy unless its loop failed
-            return bool(self.node.loop_error is None)
-        node = self.node
-        node.stop_loop()
-        healthy = bool(node.loop_error is None)
-        if node.write_error is None:
-            node.drain()
-        if node.write_error is not None:
-            node.report_write_error()
-            print(f"recorder: error: {node.write_error}", file=sys.stderr)
-            return False
-        return healthy
+        if self.name == "recorder":
+            return bool(self.node.finish_recording())
+        return bool(self.node.loop_error is None)  # a loop node: healthy unless its loop failed
 
 
 def _build(name: str, cli_args: Sequence[str]) -> Member:

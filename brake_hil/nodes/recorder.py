@@ -303,6 +303,21 @@ class RecorderNode(Node):
                 break
             time.sleep(0.005)
 
+    def finish_recording(self) -> bool:
+        """Stop the loop and record what the middleware still holds (:meth:`drain`).
+
+        Returns False after a failed write (published as an ERROR on ``/diagnostics``, one
+        line on stderr) or a failed loop; call :meth:`close` next.
+        """
+        self.stop_loop()
+        if self.write_error is None:
+            self.drain()
+        if self.write_error is not None:
+            self.report_write_error()
+            print(f"recorder: error: {self.write_error}", file=sys.stderr)
+            return False
+        return self.loop_error is None
+
     def close(self) -> None:
         """Finish the recording: last chunk, summaries, ``metadata.yaml``.
 
@@ -331,15 +346,7 @@ def main(args: list[str] | None = None) -> int:
 
     def run(node: RecorderNode) -> bool:
         common.wait_for_signal(lambda: node.stop.is_set() or not node.running)
-        node.stop_loop()
-        healthy = node.loop_error is None
-        if node.write_error is None:
-            node.drain()
-        if node.write_error is not None:
-            node.report_write_error()
-            print(f"recorder: error: {node.write_error}", file=sys.stderr)
-            return False
-        return healthy
+        return node.finish_recording()
 
     nodes: list[RecorderNode] = []
 
