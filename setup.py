@@ -37,6 +37,7 @@ setup(
         "cantools>=39",
         "matplotlib>=3.7",
         "tqdm>=4.60",
+        "distributed>=2024.1",  # Dask: work over many recordings (LocalCluster or a scheduler)
     ],
     extras_require={
         "ros": ROS_WHEELS,

@@ -21,13 +21,24 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("brake_hil.runtime",),
     ("brake_hil.io",),
     ("brake_hil.virtual_rig",),
+    ("brake_hil.results",),
     ("brake_hil.report",),
     ("brake_hil.app",),
     ("brake_hil.cli", "brake_hil.nodes"),
 )
 """Lowest first: a module may import its own layer's and lower layers' modules only."""
 
-ROS_FREE = ("physics", "analysis", "diagnosis", "live", "runtime", "io", "virtual_rig", "app")
+ROS_FREE = (
+    "physics",
+    "analysis",
+    "diagnosis",
+    "live",
+    "runtime",
+    "io",
+    "virtual_rig",
+    "results",
+    "app",
+)
 """Subpackages that must import with rclpy unimportable (with ``cli`` and ``report``)."""
 
 

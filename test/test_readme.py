@@ -21,7 +21,17 @@ import pytest
 from test.conftest import PROJECT
 
 README = PROJECT / "README.md"
-LONG = ("scripts/main.sh", "--can-emulator", "benchmarks/", "brake-hil cases", "benchmark ")
+LONG = (
+    "scripts/main.sh",
+    "--can-emulator",
+    "benchmarks/",
+    "brake-hil cases",
+    "benchmark ",
+    "brake-hil fleet",
+    "brake-hil trend",
+    "dask ",
+    "out/lab",  # the virtual lab's walk-through: its recordings come from 'brake-hil fleet'
+)
 NEVER = ("scripts/test.sh",)
 
 

@@ -29,7 +29,7 @@ import statistics
 import time
 
 from brake_hil.app.output import check_outputs, write_json
-from brake_hil.app.parallel import Outcome, parallel_map, values
+from brake_hil.app.parallel import SERIAL, Outcome, Workers, parallel_map, values
 from brake_hil.diagnosis.diagnose import diagnose
 from brake_hil.errors import BrakeHilError
 from brake_hil.io.recording_reader import read_recording
@@ -84,15 +84,15 @@ def diagnose_case(case_dir: Path) -> CaseResult:
 
 def run_cases(
     case_dirs: Iterable[Path],
-    jobs: int = 1,
+    workers: Workers = SERIAL,
     progress: Callable[[CaseResult], None] | None = None,
 ) -> list[CaseResult]:
-    """Diagnose every case (sorted by folder), ``jobs`` processes at a time.
+    """Diagnose every case (sorted by folder) where ``workers`` says.
 
     Args:
         case_dirs: case folders, each with ``recording/`` and ``rig.yaml``.
-        jobs: worker processes.
-        progress: called with each case's result, in the cases' order.
+        workers: where the cases are diagnosed (:class:`~brake_hil.app.parallel.Workers`).
+        progress: called with each case's result as it comes in (in the order they finish).
 
     Returns:
         One result per case, in order; a case whose input is refused carries its error.
@@ -102,7 +102,7 @@ def run_cases(
         if progress is not None and outcome.value is not None:
             progress(outcome.value)
 
-    return values(parallel_map(diagnose_case, sorted(case_dirs), jobs, report))
+    return values(parallel_map(diagnose_case, sorted(case_dirs), workers, report))
 
 
 def read_labels(path: Path) -> dict[str, list[str]]:
@@ -212,7 +212,7 @@ def case_count(directory: Path) -> int:
 
 def run_benchmark(
     directory: Path,
-    jobs: int = 1,
+    workers: Workers = SERIAL,
     json_path: Path | None = None,
     progress: Callable[[CaseResult], None] | None = None,
 ) -> Benchmark:
@@ -222,9 +222,9 @@ def run_benchmark(
 
     Args:
         directory: made by ``brake-hil cases`` (``cases/NNN/`` and ``labels.json``).
-        jobs: worker processes.
+        workers: where the cases are diagnosed.
         json_path: write the figures here as JSON (``None``: nowhere).
-        progress: called with each case's result, in the cases' order.
+        progress: called with each case's result as it comes in (in the order they finish).
 
     Returns:
         The verdicts and the figures.
@@ -239,7 +239,7 @@ def run_benchmark(
     labels_path = directory / "labels.json"
     if not labels_path.exists():
         raise BrakeHilError(f"{labels_path}: no labels to score against")
-    results = run_cases(cases, jobs, progress)
+    results = run_cases(cases, workers, progress)
     figures = score(results, read_labels(labels_path))
     write_json(json_path, figures)
     return Benchmark(tuple(results), figures, json_path)

@@ -13,7 +13,7 @@ from functools import partial
 from pathlib import Path
 from typing import Any
 
-from brake_hil.app.parallel import Outcome, parallel_map, values
+from brake_hil.app.parallel import SERIAL, Outcome, Workers, parallel_map, values
 from brake_hil.errors import BrakeHilError
 from brake_hil.virtual_rig.cases import make_case, select_cases, write_labels
 
@@ -26,11 +26,11 @@ def generate_cases(
     seed: int = 0,
     *,
     pulsing_s: float = 5.0,
-    jobs: int = 1,
+    workers: Workers = SERIAL,
     error_scale: float = 1.0,
     kinds: Sequence[str] = (),
     family: str = "a",
-    progress: Callable[[int, int], None] | None = None,
+    progress: Callable[[int, int, int], None] | None = None,
 ) -> Path:
     """Write ``count`` labelled cases under ``out``; return the path of ``labels.json``.
 
@@ -40,14 +40,14 @@ def generate_cases(
         count: number of cases.
         seed: seed of every draw (cases, strengths, parameter errors, sensor noise).
         pulsing_s: seconds of 5 Hz pulsing per maximum pressure (5 s: 18 s recordings).
-        jobs: worker processes (the machine's cores, at most).
+        workers: where the cases are simulated (:class:`~brake_hil.app.parallel.Workers`).
         error_scale: multiplies the one-sigma tolerances the parameter errors are drawn from.
         kinds: keep only cases of these kinds (null, single, pair, unexplained), numbered as
             in the full schedule; ``count`` is then the number kept.
         family: the family of truth laws (``a``, the registered laws, or ``b``; see
             :mod:`brake_hil.virtual_rig.cases`).
-        progress: called with the number of cases written and the number in all: once
-            before the first is simulated, then as each finishes (in the cases' order).
+        progress: called with the number of cases written, failed and in all: once before
+            the first is simulated, then as each finishes (in the order they finish).
 
     Raises:
         FileExistsError: ``out`` holds files already.
@@ -62,18 +62,19 @@ def generate_cases(
     cases_dir = out / "cases"
     cases_dir.mkdir(parents=True, exist_ok=True)
 
-    written = 0
+    written = failed = 0
 
     def report(outcome: Outcome[dict[str, Any]]) -> None:
-        nonlocal written
-        written += 1 if outcome.ok else 0
+        nonlocal written, failed
+        written += outcome.ok
+        failed += not outcome.ok
         if progress is not None:
-            progress(written, len(specs))
+            progress(written, failed, len(specs))
 
     if progress is not None:
-        progress(0, len(specs))
+        progress(0, 0, len(specs))
     simulate = partial(make_case, cases_dir=cases_dir, pulsing_s=pulsing_s)
-    made = values(parallel_map(simulate, specs, jobs, report))
+    made = values(parallel_map(simulate, specs, workers, report))
     labels = {spec.case_id: label for spec, label in zip(specs, made)}
     return write_labels(
         out,
@@ -102,11 +103,11 @@ def run_cases(
     seed: int = 0,
     *,
     pulsing_s: float = 5.0,
-    jobs: int = 1,
+    workers: Workers = SERIAL,
     error_scale: float = 1.0,
     kinds: Sequence[str] = (),
     family: str = "a",
-    progress: Callable[[int, int], None] | None = None,
+    progress: Callable[[int, int, int], None] | None = None,
 ) -> CasesResult:
     """``brake-hil cases``: check the options, then :func:`generate_cases`.
 
@@ -115,11 +116,11 @@ def run_cases(
         count: number of cases (at least 1).
         seed: seed of every draw.
         pulsing_s: seconds of 5 Hz pulsing per maximum pressure (above 0).
-        jobs: worker processes (at least 1).
+        workers: where the cases are simulated.
         error_scale: multiplies the one-sigma tolerances of the parameter errors.
         kinds: keep only cases of these kinds (empty: every kind).
         family: the family of truth laws, ``a`` or ``b``.
-        progress: called with the cases written and the cases in all (see
+        progress: called with the cases written, failed and in all (see
             :func:`generate_cases`).
 
     Returns:
@@ -128,8 +129,8 @@ def run_cases(
     Raises:
         BrakeHilError: a bad option, or ``out`` is not a new or empty directory.
     """
-    if count < 1 or jobs < 1 or pulsing_s <= 0.0:
-        raise BrakeHilError("cases: --count and --jobs must be >= 1, --pulsing-seconds > 0")
+    if count < 1 or pulsing_s <= 0.0:
+        raise BrakeHilError("cases: --count must be >= 1, --pulsing-seconds > 0")
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise BrakeHilError(f"{out}: not empty; choose a new directory for the cases")
     labels = generate_cases(
@@ -137,7 +138,7 @@ def run_cases(
         count,
         seed,
         pulsing_s=pulsing_s,
-        jobs=jobs,
+        workers=workers,
         error_scale=error_scale,
         kinds=kinds,
         family=family,

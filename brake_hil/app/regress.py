@@ -44,7 +44,7 @@ from brake_hil.analysis.stamp_scoring import (
     METRIC_KEYS,
     score_segments,
 )
-from brake_hil.app.parallel import Outcome, parallel_map, values
+from brake_hil.app.parallel import ONE_PER_CORE, Outcome, Workers, parallel_map, values
 from brake_hil.errors import BaselineError, NoSteadyPulsingError, RecordingError, SignalError
 from brake_hil.io.recording_reader import read_recording
 from brake_hil.live.model_file import load_model
@@ -264,7 +264,7 @@ def replay_all(
     bags: Sequence[Path],
     model_file: Path,
     reader: Callable[[Path], Recording] = read_recording,
-    jobs: int | None = None,
+    workers: Workers = ONE_PER_CORE,
     mean_pressure: float | None = None,
     progress: Callable[[Outcome[ReplayResult]], None] | None = None,
 ) -> list[ReplayResult]:
@@ -274,9 +274,9 @@ def replay_all(
         bags: recordings to replay.
         model_file: the model file every bag is replayed through.
         reader: reads a recording (must pickle: a module-level function).
-        jobs: worker processes (``None``: one per CPU).
+        workers: where the bags are replayed (:class:`~brake_hil.app.parallel.Workers`).
         mean_pressure: the model's operating point (Pa); default each recording's mean ``p_i``.
-        progress: called with each bag's outcome, in the bags' order.
+        progress: called with each bag's outcome as it finishes (in the order they finish).
 
     Returns:
         One result per bag, in order.
@@ -287,7 +287,7 @@ def replay_all(
     replay = partial(
         replay_file, model_file=model_file, reader=reader, mean_pressure=mean_pressure
     )
-    return values(parallel_map(replay, bags, jobs, progress))
+    return values(parallel_map(replay, bags, workers, progress))
 
 
 @dataclass(frozen=True)
@@ -324,7 +324,7 @@ def run_regression(
     baseline_path: Path,
     model_file: Path | None = None,
     update: bool = False,
-    jobs: int | None = None,
+    workers: Workers = ONE_PER_CORE,
     progress: Callable[[Outcome[ReplayResult]], None] | None = None,
     reader: Callable[[Path], Recording] = read_recording,
 ) -> Regression:
@@ -335,8 +335,8 @@ def run_regression(
         baseline_path: the baseline JSON (written when ``update``).
         model_file: the model file; default the baseline's.
         update: rewrite the baseline with these results instead of only comparing.
-        jobs: parallel replays (``None`` or 0: one per CPU).
-        progress: called with each bag's outcome, in the bags' order.
+        workers: where the bags are replayed (:class:`~brake_hil.app.parallel.Workers`).
+        progress: called with each bag's outcome as it finishes (in the order they finish).
         reader: reads a recording (must pickle: a module-level function).
 
     A recording without steady 5 Hz pulsing (a ramp, a sweep) has nothing to score: it is
@@ -363,7 +363,7 @@ def run_regression(
         raise BaselineError(f"{baseline_path}: bags given twice: {sorted(keys)}")
     started = time.perf_counter()
     replay = partial(replay_file, model_file=model_file, reader=reader, mean_pressure=None)
-    outcomes = parallel_map(replay, bags, jobs or None, progress)
+    outcomes = parallel_map(replay, bags, workers, progress)
     wall = time.perf_counter() - started
     results: dict[str, ReplayResult] = {}
     skipped: dict[str, str] = {}

@@ -88,5 +88,7 @@ def _run(args: argparse.Namespace) -> int:
         "benchmark": commands.benchmark,
         "regress": commands.regress,
         "recover": commands.recover,
+        "fleet": commands.fleet,
+        "trend": commands.trend,
     }.get(args.command)
     return run(args) if run is not None else 0

@@ -17,12 +17,15 @@ from typing import TYPE_CHECKING
 
 from tqdm import tqdm
 
-from brake_hil.cli.progress import progress_bar
+from brake_hil.app.recordings import recording_name, rig_beside
+from brake_hil.cli.progress import FleetBar, fleet_bar, progress_bar
 
 if TYPE_CHECKING:
     from brake_hil.app.benchmark import CaseResult
+    from brake_hil.app.diagnose_many import RecordingDiagnosis
+    from brake_hil.app.parallel import Outcome
     from brake_hil.app.recover import RecoverResult
-    from brake_hil.app.regress import MetricCheck
+    from brake_hil.app.regress import MetricCheck, ReplayResult
 
 __all__ = [
     "benchmark",
@@ -30,12 +33,16 @@ __all__ = [
     "characterize",
     "compare",
     "diagnose",
+    "diagnose_many",
+    "diagnose_one",
+    "fleet",
     "format_checks",
     "recording_name",
     "regress",
     "rig_beside",
     "simulate_lti",
     "simulate_virtual",
+    "trend",
 ]
 
 
@@ -47,7 +54,9 @@ def _json_written(path: Path | None) -> None:
 def compare(args: argparse.Namespace) -> int:
     """``brake-hil compare``: the seed's Table 4-5 metrics per channel."""
     from brake_hil.app.compare import run_compare
+    from brake_hil.app.results_db import check_database
 
+    check_database(args.db)
     result = run_compare(args.recording, args.rig, args.json, args.plot)
     print(f"recording {args.recording}  rig {args.rig} ({result.rig.name})")
     for segment in result.comparison.segments:
@@ -64,6 +73,11 @@ def compare(args: argparse.Namespace) -> int:
     if result.plot_path is not None:
         print(f"plot written to {result.plot_path}")
     _json_written(result.json_path)
+    if args.db:
+        from brake_hil.app.results_db import append_comparison
+
+        stored = append_comparison(args.recording, args.rig, result.comparison.metrics(), args.db)
+        print(f"results appended to {stored}")
     return 0
 
 
@@ -89,15 +103,33 @@ def characterize(args: argparse.Namespace) -> int:
 
 
 def diagnose(args: argparse.Namespace) -> int:
-    """``brake-hil diagnose``: the verdict, its explanation and where the files are.
+    """``brake-hil diagnose``: one recording (:func:`diagnose_one`) or many.
+
+    Several paths, a glob or a folder of recordings are many
+    (:func:`~brake_hil.app.recordings.names_many`).
+    """
+    from brake_hil.app.recordings import names_many
+
+    if names_many(args.recording):
+        return diagnose_many(args)
+    args.recording = args.recording[0]
+    return diagnose_one(args)
+
+
+def diagnose_one(args: argparse.Namespace) -> int:
+    """One recording: the verdict, its explanation, where the files are; results to the DB.
 
     ``--rig`` defaults to ``RECORDING.rig.yaml`` beside the recording, ``--out`` to
-    ``out/<recording name>/``; the command says which it used.
+    ``out/<recording name>/``; the command says which it used. The results go to ``--db``, or
+    ``results.sqlite`` in ``--out`` (default: in ``out/``).
     """
     from brake_hil.app.diagnose import DIAGNOSIS_STEPS, run_diagnose
+    from brake_hil.app.results_db import DATABASE_NAME, append_diagnosis, check_database
 
     rig = args.rig if args.rig is not None else rig_beside(args.recording)
     out = args.out if args.out is not None else Path("out") / recording_name(args.recording)
+    database = args.db or (args.out or Path("out")) / DATABASE_NAME
+    check_database(database)
     if args.rig is None:
         print(f"rig file: {rig} (beside the recording; --rig to choose another)")
     if args.out is None:
@@ -130,7 +162,48 @@ def diagnose(args: argparse.Namespace) -> int:
     print(f"verdict: {verdict} (confidence {diagnosis.confidence:.2f})")
     print(diagnosis.explanation)
     print(f"report: {result.report_path}")
+    stored = append_diagnosis(args.recording, rig, result.json_path, database)
+    print(f"results appended to {stored}")
     return 0
+
+
+def diagnose_many(args: argparse.Namespace) -> int:
+    """Many recordings on Dask: a bar over them, a line per verdict, failures named.
+
+    Exit status 0 when every recording was diagnosed, 2 when any failed (each named with its
+    reason on stderr; the others finished and are in the database).
+    """
+    from brake_hil.app.diagnose_many import run_diagnose_many
+    from brake_hil.cli.progress import fleet_bar
+    from brake_hil.cli.workers import workers_from_args
+
+    out = args.out if args.out is not None else Path("out")
+    with ExitStack() as stack:
+        bars: list[FleetBar] = []
+
+        def start(count: int) -> None:
+            bars.append(stack.enter_context(fleet_bar(count, "diagnose", "recording")))
+
+        def show(outcome: Outcome[RecordingDiagnosis]) -> None:
+            bar = bars[0]
+            if outcome.value is not None:
+                done = outcome.value
+                verdict = ", ".join(done.effects) or "none"
+                seconds = f"{done.seconds:.1f} s"
+                bar.write(f"{done.job.recording}: {verdict} ({done.confidence:.2f}, {seconds})")
+            bar.finished(outcome.ok)
+
+        result = run_diagnose_many(
+            args.recording, args.rig, out, workers_from_args(args), args.db, show, start
+        )
+    failed = result.failed
+    print(
+        f"diagnosed {len(result.jobs) - len(failed)} of {len(result.jobs)} recordings in "
+        f"{result.seconds:.0f} s; one folder each under {out}; results in {result.database}"
+    )
+    for job, reason in failed:
+        print(f"brake-hil diagnose: {job.recording}: {reason}", file=sys.stderr)
+    return 2 if failed else 0
 
 
 def simulate_lti(args: argparse.Namespace) -> int:
@@ -190,23 +263,25 @@ def simulate_virtual(args: argparse.Namespace) -> int:
 
 
 def cases(args: argparse.Namespace) -> int:
-    """``brake-hil cases``, with a progress bar of cases written."""
+    """``brake-hil cases``, with a progress bar of cases written, failed and left."""
     from brake_hil.app.cases import run_cases
+    from brake_hil.cli.workers import workers_from_args
 
+    workers = workers_from_args(args)
     with ExitStack() as stack:
-        bars: list[tqdm] = []  # type: ignore[type-arg]
+        bars: list[FleetBar] = []
 
-        def progress(done: int, total: int) -> None:
+        def progress(done: int, failed: int, total: int) -> None:
             if not bars:
-                bars.append(stack.enter_context(progress_bar(total, "cases", "case")))
-            bars[0].update(done - bars[0].n)
+                bars.append(stack.enter_context(fleet_bar(total, "cases", "case")))
+            bars[0].count(done, failed)
 
         result = run_cases(
             args.out,
             args.count,
             args.seed,
             pulsing_s=args.pulsing_seconds,
-            jobs=args.jobs,
+            workers=workers,
             error_scale=args.error_scale,
             kinds=tuple(args.kind),
             family=args.family,
@@ -216,36 +291,67 @@ def cases(args: argparse.Namespace) -> int:
     return 0
 
 
+def fleet(args: argparse.Namespace) -> int:
+    """``brake-hil fleet``, with a progress bar of recordings written."""
+    from brake_hil.app.fleet import run_fleet
+    from brake_hil.cli.workers import workers_from_args
+
+    with ExitStack() as stack:
+        bars: list[tqdm] = []  # type: ignore[type-arg]
+
+        def progress(done: int, total: int) -> None:
+            if not bars:
+                bars.append(stack.enter_context(progress_bar(total, "fleet", "recording")))
+            bars[0].update(done - bars[0].n)
+
+        result = run_fleet(
+            args.out,
+            args.runs,
+            args.seed,
+            pulsing_s=args.pulsing_seconds,
+            workers=workers_from_args(args),
+            progress=progress,
+        )
+    print(
+        f"wrote {result.recordings} recordings of {', '.join(result.rigs)} under {result.out} "
+        f"(what was simulated: {result.truth_path})"
+    )
+    print(
+        f"next: brake-hil diagnose {result.out} --out OUT, then "
+        "brake-hil trend --db OUT/results.sqlite"
+    )
+    return 0
+
+
 def benchmark(args: argparse.Namespace) -> int:
     """``brake-hil benchmark``: a bar of cases, a line per case as its verdict comes in.
 
     Then the figures; a figure over no case is ``n/a``.
     """
     from brake_hil.app.benchmark import case_count, run_benchmark
+    from brake_hil.cli.workers import workers_from_args
 
+    workers = workers_from_args(args)
     with ExitStack() as stack:
-        bars: list[tqdm] = []  # type: ignore[type-arg]
+        bars: list[FleetBar] = []
 
         def start() -> None:  # once the cases are known to exist: bad input stays one line
-            bars.append(stack.enter_context(progress_bar(count, "benchmark", "case")))
+            bars.append(stack.enter_context(fleet_bar(count, "benchmark", "case")))
 
         def show(result: CaseResult) -> None:
             if not bars:
                 start()
-            bar = bars[0]
             verdict = ", ".join(result.effects) or "none"
-            bar.write(
+            bars[0].write(
                 f"case {result.case}: {verdict} ({result.confidence:.2f}, {result.seconds:.1f} s)"
-                + (f" error: {result.error}" if result.error else ""),
-                file=sys.stdout,
+                + (f" error: {result.error}" if result.error else "")
             )
-            sys.stdout.flush()
-            bar.update(1)
+            bars[0].finished(not result.error)
 
         count = case_count(args.directory)
         if count and (args.directory / "labels.json").is_file():
             start()
-        result = run_benchmark(args.directory, args.jobs, args.json, show)
+        result = run_benchmark(args.directory, workers, args.json, show)
     figures = result.figures
     rows = [
         ("top-1 accuracy, single effects", "top1_accuracy_single", "single_effect_cases"),
@@ -282,35 +388,28 @@ def _figure(value: object, scale: float, spec: str, suffix: str = "") -> str:
     return f"{scale * value:{spec}}{suffix}"
 
 
-def rig_beside(recording: Path) -> Path:
-    """``RECORDING.rig.yaml`` beside a recording (a bag folder or a bare ``.mcap``/``.db3``).
-
-    Raises:
-        BrakeHilError: no such file (the message says to pass ``--rig``).
-    """
-    from brake_hil.errors import BrakeHilError
-
-    base = Path(str(recording).rstrip("/"))
-    candidates = [base.parent / f"{base.name}.rig.yaml"]
-    if base.suffix in (".mcap", ".db3"):
-        candidates.append(base.with_suffix(".rig.yaml"))
-    for path in candidates:
-        if path.is_file():
-            return path
-    raise BrakeHilError(f"{recording}: no rig file beside it ({candidates[0]}); pass --rig")
-
-
-def recording_name(recording: Path) -> str:
-    """A recording's name: its folder's, or its file's without the suffix."""
-    base = Path(str(recording).rstrip("/"))
-    return base.stem if base.suffix in (".mcap", ".db3") else base.name
-
-
 def regress(args: argparse.Namespace) -> int:
-    """``brake-hil regress``: 0 when nothing moved (or the baseline was written), else 1."""
-    from brake_hil.app.regress import run_regression
+    """``brake-hil regress``: 0 when nothing moved (or the baseline was written), else 1.
 
-    result = run_regression(args.recordings, args.baseline, args.model, args.update, args.jobs)
+    A bar of recordings replayed (one without steady pulsing counts as done: it is skipped
+    with a note, not failed), from before the baseline and model are read: their refusal
+    comes sooner than the bar's first draw.
+    """
+    from brake_hil.app.regress import run_regression
+    from brake_hil.app.results_db import check_database
+    from brake_hil.cli.workers import workers_from_args
+    from brake_hil.errors import NoSteadyPulsingError
+
+    workers = workers_from_args(args)
+    check_database(args.db)
+    with fleet_bar(len(args.recordings), "regress") as bar:
+
+        def progress(outcome: Outcome[ReplayResult]) -> None:
+            bar.finished(outcome.ok or isinstance(outcome.error, NoSteadyPulsingError))
+
+        result = run_regression(
+            args.recordings, args.baseline, args.model, args.update, workers, progress
+        )
     for key, replay in result.results.items():
         print(
             f"{key}: {replay.samples} samples ({replay.duration_s:.1f} s) replayed through "
@@ -329,6 +428,11 @@ def regress(args: argparse.Namespace) -> int:
             print(line)
     if result.updated:
         print(f"baseline written to {result.baseline_path}")
+    if args.db and result.results:
+        from brake_hil.app.results_db import append_regression
+
+        replays = {Path(r.recording): r.metrics for r in result.results.values()}
+        print(f"results appended to {append_regression(replays, result.model_file, args.db)}")
         return 0
     if result.moved:
         print(f"{len(result.moved)} metrics moved past their tolerance or have no baseline")
@@ -367,6 +471,19 @@ def recover(args: argparse.Namespace) -> int:
     result = run_recover(args.bag, args.out)
     for line in format_recovery(result):
         print(line)
+    return 0
+
+
+def trend(args: argparse.Namespace) -> int:
+    """``brake-hil trend``: per rig, one line per finding, then where the page is."""
+    from brake_hil.app.trend import run_trend
+
+    result = run_trend(args.db, args.rig, args.out)
+    for rig in result.rigs:
+        print(f"{rig.rig}: {len(rig.rows)} diagnoses")
+        for line in rig.summary():
+            print(f"  {line}")
+    print(f"report: {result.report_path}")
     return 0
 
 

@@ -36,6 +36,8 @@ _VIRTUAL_OPTIONS = ("effect", "excitation", "nominal", "rig_out", "method", "rto
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``brake-hil``."""
+    from brake_hil.cli.workers import add_workers_arguments
+
     parser = argparse.ArgumentParser(
         prog="brake-hil", description="Hardware-in-the-loop tools for hydraulic disk brakes."
     )
@@ -46,23 +48,12 @@ def build_parser() -> argparse.ArgumentParser:
     cmp.add_argument("--rig", type=Path, required=True, help="the rig file (YAML) to model")
     cmp.add_argument("--json", type=Path, help="also write the metrics here as JSON")
     cmp.add_argument("--plot", type=Path, help="PNG of measured vs predicted")
+    add_database_argument(cmp, "default: none")
     chz = commands.add_parser("characterize", help="the seed's Table 3 from a recording")
     chz.add_argument("recording", type=Path, help=_RECORDING_HELP)
     chz.add_argument("--rig", type=Path, required=True, help="the rig file (YAML)")
     chz.add_argument("--json", type=Path, help="also write the table here as JSON")
-    dgn = commands.add_parser("diagnose", help="find and model the physics the model left out")
-    dgn.add_argument("recording", type=Path, help=_RECORDING_HELP)
-    dgn.add_argument(
-        "--rig",
-        type=Path,
-        help="the nominal rig file (YAML; default: RECORDING.rig.yaml beside the recording)",
-    )
-    dgn.add_argument(
-        "--out",
-        type=Path,
-        help="folder for diagnosis.json, improved_model.json and report.html "
-        "(default: out/<recording name>/ in the working directory)",
-    )
+    _add_diagnose_parser(commands)
     sim = commands.add_parser(
         "simulate", help="write a recording of the LTI model or of the virtual rig"
     )
@@ -83,7 +74,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_cases_parser(commands)
     bench = commands.add_parser("benchmark", help="score the diagnosis blind on labelled cases")
     bench.add_argument("directory", type=Path, help="made by 'brake-hil cases'")
-    bench.add_argument("--jobs", type=int, default=1, help="worker processes (1)")
+    add_workers_arguments(bench)
     bench.add_argument("--json", type=Path, help="also write the figures here as JSON")
     reg = commands.add_parser("regress", help="replay recordings through the model vs a baseline")
     reg.add_argument(
@@ -95,9 +86,97 @@ def build_parser() -> argparse.ArgumentParser:
     reg.add_argument("--baseline", type=Path, required=True, help="baseline JSON")
     reg.add_argument("--model", type=Path, help="model file (default: the baseline's)")
     reg.add_argument("--update", action="store_true", help="rewrite the baseline")
-    reg.add_argument("--jobs", type=int, help="parallel replays (default: one per CPU)")
+    add_database_argument(reg, "default: none")
+    add_workers_arguments(reg)
     _add_recover_parser(commands)
+    _add_fleet_parser(commands)
+    _add_trend_parser(commands)
     return parser
+
+
+def add_database_argument(parser: argparse.ArgumentParser, default: str) -> None:
+    """``--db``: the results database a command appends to."""
+    parser.add_argument(
+        "--db",
+        metavar="URL",
+        help=f"results database to append to: an SQLite file or sqlite:///PATH ({default})",
+    )
+
+
+def _add_diagnose_parser(commands: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """``brake-hil diagnose RECORDING... [--rig] [--out] [--db]`` and the workers' options."""
+    from brake_hil.cli.workers import add_workers_arguments
+
+    dgn = commands.add_parser(
+        "diagnose",
+        help="find and model the physics the model left out",
+        description="Diagnose one recording, or many: folders of recordings and globs "
+        "(quoted, e.g. 'lab/**/run-*') are diagnosed on Dask, each into its own folder under "
+        "--out, and every result is appended to the results database.",
+    )
+    dgn.add_argument(
+        "recording",
+        type=Path,
+        nargs="+",
+        help=_RECORDING_HELP + "; or folders of recordings, or globs (many recordings)",
+    )
+    dgn.add_argument(
+        "--rig",
+        type=Path,
+        help="the nominal rig file (YAML; default: RECORDING.rig.yaml beside each recording)",
+    )
+    dgn.add_argument(
+        "--out",
+        type=Path,
+        help="folder for diagnosis.json, improved_model.json and report.html (default: "
+        "out/<recording name>/ in the working directory); many recordings: the folder that "
+        "gets one folder per recording (default: out/)",
+    )
+    add_database_argument(dgn, "default: results.sqlite in the output folder")
+    add_workers_arguments(dgn)
+
+
+def _add_fleet_parser(commands: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """``brake-hil fleet --out DIR``: the virtual lab of ``trend``'s example."""
+    from brake_hil.cli.workers import add_workers_arguments
+
+    fleet = commands.add_parser(
+        "fleet",
+        help="write a small virtual lab's daily recordings (one rig wearing, one steady)",
+        description="Two virtual rigs recorded once a day: rig-1's seals wear and air collects "
+        "in its fluid, rig-2 stays steady. Diagnose them with 'brake-hil diagnose DIR', then "
+        "'brake-hil trend'. What was simulated is in DIR/truth.json, which neither reads.",
+    )
+    fleet.add_argument("--out", type=Path, required=True, help="new directory")
+    fleet.add_argument("--runs", type=int, default=30, help="recordings per rig, one a day (30)")
+    fleet.add_argument("--seed", type=int, default=0, help="draws the rigs and the noise (0)")
+    fleet.add_argument(
+        "--pulsing-seconds", type=float, default=5.0, help="per pressure segment (5: 18 s)"
+    )
+    add_workers_arguments(fleet)
+
+
+def _add_trend_parser(commands: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """``brake-hil trend --db F [--rig NAME] [--out DIR]``."""
+    trend = commands.add_parser(
+        "trend",
+        help="each rig's calibrated values and effects across its stored diagnoses",
+        description="Read the diagnoses of the results database in time order and say, per "
+        "rig, which calibrated value drifted or sits off the rig file and which effect grew "
+        "(only trends beyond doubt); write trend.html with a figure per rig.",
+    )
+    trend.add_argument(
+        "--db",
+        required=True,
+        metavar="URL",
+        help="the results database: an SQLite file or sqlite:///PATH",
+    )
+    trend.add_argument("--rig", metavar="NAME", help="only this rig (its name in the rig file)")
+    trend.add_argument(
+        "--out",
+        type=Path,
+        help="folder for trend.html and its figures (default: trend/ beside the database)",
+    )
 
 
 def _add_recover_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -154,6 +233,8 @@ def _add_virtual_rig_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _add_cases_parser(commands: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     """The ``brake-hil cases`` sub-command."""
+    from brake_hil.cli.workers import add_workers_arguments
+
     cases = commands.add_parser(
         "cases", help="write labelled virtual-rig cases for scoring a diagnosis blind"
     )
@@ -163,7 +244,7 @@ def _add_cases_parser(commands: argparse._SubParsersAction) -> None:  # type: ig
     cases.add_argument(
         "--pulsing-seconds", type=float, default=5.0, help="per pressure segment (5: 18 s)"
     )
-    cases.add_argument("--jobs", type=int, default=1, help="worker processes")
+    add_workers_arguments(cases)
     cases.add_argument(
         "--error-scale", type=float, default=1.0, help="scales the rig tolerances (1 sigma)"
     )

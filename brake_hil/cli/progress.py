@@ -7,6 +7,9 @@ every :data:`LINE_INTERVAL_S` seconds while the work runs, so a log shows that i
 Nothing is drawn before :data:`QUIET_START_S` (terminal) or :data:`LINE_INTERVAL_S` (not)
 seconds: a command refused at its door prints its one error line and nothing else; work that
 ends sooner than that prints its final state once.
+
+Work over many recordings (``cases``, ``benchmark``, ``regress``, ``diagnose`` of many) shows
+one :func:`fleet_bar`: recordings done, failed and left, and the rate per minute.
 """
 
 from __future__ import annotations
@@ -19,7 +22,7 @@ from typing import IO
 
 from tqdm import tqdm
 
-__all__ = ["LINE_INTERVAL_S", "QUIET_START_S", "progress_bar"]
+__all__ = ["LINE_INTERVAL_S", "QUIET_START_S", "FleetBar", "fleet_bar", "progress_bar"]
 
 LINE_INTERVAL_S = 5.0
 """Seconds between progress lines when stderr is not a terminal."""
@@ -90,3 +93,58 @@ def progress_bar(
             if terminal:
                 target.write("\n")
         bar.close()
+
+
+class FleetBar:
+    """Recordings done, failed and left, and recordings per minute, on one tqdm bar."""
+
+    def __init__(self, bar: tqdm, unit: str) -> None:  # type: ignore[type-arg]
+        self.bar = bar
+        self.unit = unit
+        self.done = 0
+        self.failed = 0
+        self.count(0, 0)
+
+    @property
+    def left(self) -> int:
+        """Recordings neither done nor failed yet."""
+        return max(0, int(self.bar.total) - self.done - self.failed)
+
+    def count(self, done: int, failed: int) -> None:
+        """Show ``done`` recordings done and ``failed`` failed so far."""
+        self.done, self.failed = done, failed
+        minutes = float(self.bar.format_dict["elapsed"]) / 60.0
+        rate = (done + failed) / minutes if minutes > 0.0 else 0.0
+        self.bar.set_postfix_str(
+            f"{done} done, {failed} failed, {self.left} left, {rate:.1f} {self.unit}s/min",
+            refresh=False,
+        )
+        self.bar.update(done + failed - self.bar.n)
+
+    def finished(self, ok: bool) -> None:
+        """One more recording done (``ok``) or failed."""
+        self.count(self.done + ok, self.failed + (not ok))
+
+    def write(self, line: str) -> None:
+        """``line`` on stdout, above the bar."""
+        self.bar.write(line, file=sys.stdout)
+        sys.stdout.flush()
+
+
+@contextmanager
+def fleet_bar(
+    total: int, desc: str, unit: str = "recording", stream: IO[str] | None = None
+) -> Iterator[FleetBar]:
+    """A :func:`progress_bar` of ``total`` recordings, counted by :class:`FleetBar`.
+
+    Args:
+        total: recordings in all.
+        desc: the bar's label (the command: ``"cases"``, ``"benchmark"``, ...).
+        unit: what one item is (``"recording"``, ``"case"``).
+        stream: where it goes (default ``sys.stderr``).
+    """
+    bar_format = (
+        "{desc}: {percentage:3.0f}%|{bar}| {n_fmt}/{total_fmt} [{elapsed}<{remaining}{postfix}]"
+    )
+    with progress_bar(total, desc, unit, stream, bar_format=bar_format) as bar:
+        yield FleetBar(bar, unit)

@@ -5,12 +5,14 @@ from __future__ import annotations
 import json
 from pathlib import Path
 import shutil
+import sqlite3
 import subprocess
 import sys
 
 from test.conftest import CONFIG, PROJECT
 
 BAG = PROJECT / "bags" / "one_washer_lti"
+RIG = PROJECT / "bags" / "one_washer_lti.rig.yaml"
 
 
 def regress(*args: str | Path) -> subprocess.CompletedProcess[str]:
@@ -97,3 +99,30 @@ def test_a_recording_without_steady_pulsing_is_skipped_with_a_note(tmp_path: Pat
     assert lost.returncode == 1, lost.stdout + lost.stderr
     assert "(in the baseline: FAILED)" in lost.stdout
     assert "every metric within its tolerance" not in lost.stdout
+
+
+def test_regress_and_compare_append_to_the_results_database_once_per_recording(
+    tmp_path: Path,
+) -> None:
+    database = tmp_path / "results.sqlite"
+    for _ in range(2):  # a second run replaces the first's rows
+        done = regress(BAG, "--baseline", PROJECT / "bags" / "baseline.json", "--db", database)
+        assert done.returncode == 0, done.stderr
+        assert f"results appended to {database}" in done.stdout
+    compared = subprocess.run(
+        [sys.executable, "-m", "brake_hil.cli", "compare", str(BAG), "--rig", str(RIG)]
+        + ["--db", f"sqlite:///{database}"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
+    assert compared.returncode == 0, compared.stderr
+    with sqlite3.connect(database) as connection:
+        runs = sorted(connection.execute("SELECT kind, status FROM runs"))
+        metrics = connection.execute("SELECT count(*) FROM metrics").fetchone()[0]
+    assert runs == [("comparison", "ok"), ("regression", "ok")]
+    assert metrics == 2 * 3  # one model, three channels, per run
+    refused = regress(BAG, "--baseline", PROJECT / "bags" / "baseline.json", "--db", "pg://x/y")
+    assert refused.returncode == 2 and refused.stderr.count("\n") == 1
+    assert "pg://x/y" in refused.stderr

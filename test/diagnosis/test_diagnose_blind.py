@@ -59,7 +59,7 @@ def case_set(tmp_path_factory: pytest.TempPathFactory, default_rig: Rig) -> Path
 
 
 def test_blind_diagnosis_names_each_effect_and_passes_the_null(case_set: Path) -> None:
-    results = run_cases((case_set / "cases").iterdir(), jobs=1)
+    results = run_cases((case_set / "cases").iterdir())  # serial: the default
     figures = score(results, read_labels(case_set / "labels.json"))
     by_case = {r.case: r for r in results}
     assert figures["errors"] == []

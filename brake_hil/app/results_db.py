@@ -1,0 +1,74 @@
+"""The results database's door for the commands: what each appends, in one place.
+
+``diagnose`` appends every diagnosis (default database: ``results.sqlite`` in its output
+folder); ``compare`` and ``regress`` append their metrics when ``--db`` is given. Each
+recording is one transaction (:mod:`brake_hil.results.store`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+import json
+from pathlib import Path
+
+from brake_hil.results.identity import identify, identify_with_model
+from brake_hil.results.store import open_store
+
+__all__ = [
+    "DATABASE_NAME",
+    "append_comparison",
+    "append_diagnosis",
+    "append_regression",
+    "check_database",
+]
+
+DATABASE_NAME = "results.sqlite"
+"""The results database's file name in an output folder, when ``--db`` is not given."""
+
+ChannelMetrics = Mapping[str, Mapping[str, float]]
+"""Channel -> metric -> value."""
+
+
+def _opened(database: Path | str) -> Path | str:
+    if isinstance(database, Path):
+        database.parent.mkdir(parents=True, exist_ok=True)
+    return database
+
+
+def check_database(database: Path | str | None) -> None:
+    """Open the database (made if missing) before the work: a bad one is refused first.
+
+    Raises:
+        BrakeHilError: a URL of another scheme, or a file that is not a results database.
+    """
+    if database is not None:
+        with open_store(_opened(database)):
+            pass
+
+
+def append_diagnosis(recording: Path, rig: Path, json_path: Path, database: Path | str) -> Path:
+    """Append one ``diagnosis.json`` to the database; the database's path."""
+    document = json.loads(json_path.read_text(encoding="utf-8"))
+    with open_store(_opened(database)) as store:
+        store.record_diagnosis(identify(recording, rig), document)
+        return store.path
+
+
+def append_comparison(
+    recording: Path, rig: Path, metrics: ChannelMetrics, database: Path | str
+) -> Path:
+    """Append ``compare``'s metrics (the rig file's LTI model) to the database."""
+    with open_store(_opened(database)) as store:
+        store.record_metrics("comparison", identify(recording, rig), {"model": metrics})
+        return store.path
+
+
+def append_regression(
+    replays: Mapping[Path, ChannelMetrics], model_file: Path, database: Path | str
+) -> Path:
+    """Append each replayed recording's metrics (``regress``), one transaction each."""
+    with open_store(_opened(database)) as store:
+        for recording, metrics in replays.items():
+            identity = identify_with_model(recording, model_file)
+            store.record_metrics("regression", identity, {"model": metrics})
+        return store.path

@@ -1,0 +1,455 @@
+"""A rig's health over time: its calibrated values and effects across diagnoses, in words.
+
+From the stored diagnoses of one rig (:meth:`~brake_hil.results.store.ResultsStore.diagnoses`,
+in time order) each calibrated value becomes a series of multipliers over the rig file's
+value (1 = nominal, tolerance band ``exp(±sigma)`` of the rig file's log-sigma) and each
+effect a series of its strength, the log10 of its hypothesis's held-out improvement (how many
+times the effect cuts the held-out error), with whether the verdict named it. Each series gets
+a robust trend over the run number (Theil-Sen, :func:`scipy.stats.theilslopes`) and, only when
+the data show one beyond doubt, one line in plain words:
+
+* **drift**: the value moved by at least :data:`MIN_CHANGE` of its tolerance along the fitted
+  line, and the move is significant (the Mann-Kendall test, widened for day-to-day
+  correlation, below :data:`SIGNIFICANCE`, and Theil-Sen's :data:`CONFIDENCE` interval of the
+  slope excluding 0): ``caliper stiffness fell 12 % over 40 runs (tolerance ±25 %): check the
+  caliper mounting``;
+* **offset**: no drift, and at least :data:`OFFSET_SHARE` of the runs outside the band on one
+  side: ``needle-valve resistance sits 60 % above the rig file in every run (tolerance
+  ±40 %): update the rig file``;
+* **grew**: an effect's strength rose by at least :data:`MIN_GROWTH` (log10) along a
+  significant trend, and the verdict named it in at least :data:`NAMED_SHARE` of the last
+  third of the runs: ``seal stick-slip grew over 30 runs (...): seal wear``.
+
+Only runs that identify a value (posterior sigma under the calibration's own
+:data:`~brake_hil.diagnosis.physics_checks.IDENTIFIABLE_SHARE` of the prior) count for it;
+with fewer than :data:`MIN_RUNS` the series says nothing ("too few runs to say"). Multipliers
+are relative to the rig file, so only the runs of the rig file's latest version are compared.
+
+The thresholds were set on synthetic fleets (``test/results/fleets.py``): steady rigs
+(offsets within the band, heavy-tailed and day-to-day correlated scatter up to a third of
+the tolerance, steady effects named or not) got a line in 13 of 2000 fleets of 30 runs
+(0.65 %), while in each of 200 wearing rigs of 40 runs the 12 % fall of caliper stiffness
+(2 % scatter), the air fraction rising 4 times and the growing seal stick-slip were found.
+With 4 % scatter a 12 % fall is found in 88 % of 40-run fleets, 48 % of 20-run ones.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from enum import StrEnum
+import math
+from typing import Final, NamedTuple
+
+import numpy as np
+from scipy import stats
+
+from brake_hil.diagnosis.physics_checks import IDENTIFIABLE_SHARE
+from brake_hil.physics.catalogue import CATALOGUE
+from brake_hil.results.store import DiagnosisRow
+from brake_hil.types import BoolArray, FloatArray, IntArray
+
+__all__ = [
+    "ADVICE",
+    "CONFIDENCE",
+    "MIN_CHANGE",
+    "MIN_GROWTH",
+    "MIN_RUNS",
+    "NAMED_SHARE",
+    "OFFSET_SHARE",
+    "SIGNIFICANCE",
+    "Advice",
+    "Movement",
+    "RigTrend",
+    "Series",
+    "identified",
+    "rig_trend",
+    "trends",
+]
+
+MIN_RUNS: Final = 5
+"""Fewest runs (identifying a value, or fitting an effect) a series needs to say anything."""
+CONFIDENCE: Final = 0.99
+"""Confidence of the Theil-Sen interval of a slope that must exclude 0."""
+SIGNIFICANCE: Final = 0.001
+"""Largest p-value of the trend test (:func:`_trend_p_value`). A rig has about 15 series, so
+the test is strict: at 0.002 steady synthetic fleets got a line in 1.3 %, at 0.001 in 0.65 %
+(with the size thresholds below; a 95 % interval of the slope in its place: 19 %)."""
+MIN_CHANGE: Final = 1.0 / 3.0
+"""Smallest move of a value along its fitted line, as a share of its tolerance (log-sigma),
+called a drift (1/3 of 25 %: 8 % of caliper stiffness)."""
+OFFSET_SHARE: Final = 0.9
+"""Share of runs outside the band, all on one side, that makes an offset from the rig file."""
+MIN_GROWTH: Final = math.log10(2.0)
+"""Smallest rise of an effect's strength along its fitted line (log10: it cuts the held-out
+error twice as much as it did)."""
+NAMED_SHARE: Final = 1.0 / 3.0
+"""Share of the last third of the runs whose verdict must name a growing effect."""
+
+
+class Advice(NamedTuple):
+    """How a value or effect is said, and what its move points to on the rig."""
+
+    words: str  # e.g. "caliper stiffness"
+    cause: str  # e.g. "check the caliper mounting"
+
+
+ADVICE: Final[Mapping[str, Advice]] = {
+    "caliper_stiffness": Advice("caliper stiffness", "check the caliper mounting"),
+    "valve_resistance": Advice("needle-valve resistance", "the needle valve setting moved"),
+    "effective_hydraulic_stiffness": Advice("seal stiffness k_eh", "seal wear"),
+    "effective_hydraulic_damping": Advice("seal damping c_eh", "seal wear"),
+    "air_fraction": Advice("fluid air fraction", "air in the fluid: bleed the circuit"),
+    "bore_compliance": Advice("bore compliance C_b", "air in the fluid: bleed the circuit"),
+    "hose_stiffness": Advice("hose wall modulus", "hose ageing or a new hose"),
+    "seal_stick_slip": Advice("seal stick-slip", "seal wear"),
+    "seal_groove_asymmetry": Advice("seal groove asymmetry", "seal wear"),
+    "entrained_air": Advice("entrained air", "air in the fluid: bleed the circuit"),
+    "orifice_flow": Advice("turbulent valve flow", "the valve's flow regime changed"),
+    "hose_compliance": Advice("hose compliance", "hose ageing or a new hose"),
+    "bore_friction": Advice("bore friction", "caliper cocking: check the piston and bore"),
+    "eccentric_load": Advice("eccentric load", "check the load path"),
+    "thermal_drift": Advice("thermal drift", "temperature not settled"),
+    "sensor_delay": Advice("sensor delay", "DAQ timing"),
+}
+"""Per calibrated value and effect (a test holds it to the calibration and the catalogue);
+the diagnosis report's ``RIG_CHECKS`` says in more words what to look at for an effect."""
+
+
+class Movement(StrEnum):
+    """What a series did."""
+
+    STEADY = "steady"  # within its band, or no trend beyond doubt
+    DRIFT = "drift"  # a value moved along a significant trend
+    OFFSET = "offset"  # a value outside its band throughout, without a drift
+    GREW = "grew"  # an effect grew and the verdicts came to name it
+    TOO_FEW = "too_few"  # fewer than MIN_RUNS usable runs
+
+
+@dataclass(frozen=True)
+class Series:
+    """One calibrated value or one effect of a rig across its runs, and its trend."""
+
+    name: str  # calibration value or effect name
+    kind: str  # "value" or "effect"
+    runs: IntArray  # each point's run number in the rig's time order (0 = first)
+    times_ns: IntArray  # each point's recording start (ns since the epoch; -1: unknown)
+    values: FloatArray  # value: multiplier over the rig file's; effect: log10 improvement
+    used: BoolArray  # points the trend is fitted on (value: identified in that run)
+    named: BoolArray  # effect: the run's verdict names it (value: all False)
+    band: tuple[float, float] | None  # value: multiplier band (exp(-sigma), exp(sigma))
+    slope: float  # per run: of ln multiplier (value) or log10 improvement (effect); NaN
+    interval: tuple[float, float]  # CONFIDENCE interval of the slope (per run)
+    intercept: float  # of the line at run 0, in the slope's units
+    p_value: float  # Kendall's tau test of the trend (NaN when too few)
+    movement: Movement
+    finding: str | None  # the line in plain words (drift, offset, grew); None otherwise
+
+    @property
+    def words(self) -> str:
+        """How the value or effect is said (:data:`ADVICE`)."""
+        return _advice(self.name).words
+
+    def line(self) -> FloatArray:
+        """The fitted trend at each used run, in the units of :attr:`values`."""
+        level = self.intercept + self.slope * self.runs[self.used].astype(float)
+        return np.exp(level) if self.kind == "value" else level
+
+
+@dataclass(frozen=True)
+class RigTrend:
+    """Every series of one rig, and which runs they came from."""
+
+    rig: str  # the rig's name
+    rows: tuple[DiagnosisRow, ...]  # the diagnoses trended (latest rig file), time order
+    series: tuple[Series, ...]
+    earlier: int = 0  # diagnoses against earlier versions of the rig file, left out
+    notes: tuple[str, ...] = field(default=())
+
+    @property
+    def findings(self) -> tuple[str, ...]:
+        """The lines in plain words: drifts first, then offsets, then growing effects."""
+        order = {Movement.DRIFT: 0, Movement.GREW: 1, Movement.OFFSET: 2}
+        found = sorted(
+            (s for s in self.series if s.finding is not None), key=lambda s: order[s.movement]
+        )
+        return tuple(s.finding for s in found if s.finding is not None)
+
+    @property
+    def too_few(self) -> tuple[Series, ...]:
+        """Series with fewer than :data:`MIN_RUNS` usable runs."""
+        return tuple(s for s in self.series if s.movement is Movement.TOO_FEW)
+
+    def summary(self) -> list[str]:
+        """What to print: the findings, or that nothing left its band; what was not judged."""
+        runs = len(self.rows)
+        if runs < MIN_RUNS:
+            lines = [f"too few runs to say ({runs} diagnoses, {MIN_RUNS} needed)"]
+        elif self.findings:
+            lines = list(self.findings)
+        else:
+            lines = [f"no value or effect left its band over {runs} runs"]
+        if runs >= MIN_RUNS and (few := [s for s in self.too_few if s.kind == "value"]):
+            names = ", ".join(f"{s.words} ({int(s.used.sum())})" for s in few)
+            lines.append(f"identified in too few runs to say: {names}")
+        named = [
+            s
+            for s in self.series
+            if s.kind == "effect" and s.finding is None and s.named.sum() > s.named.size / 2
+        ]
+        if named:
+            names = ", ".join(f"{s.words} ({int(s.named.sum())} of {s.named.size})" for s in named)
+            lines.append(f"named in most runs, without a trend: {names}")
+        return lines + list(self.notes)
+
+
+def identified(prior_sigma: float, posterior_sigma: float) -> bool:
+    """Whether a run identifies a value: the calibration's own rule (``not_identified``)."""
+    return math.isfinite(posterior_sigma) and posterior_sigma <= IDENTIFIABLE_SHARE * prior_sigma
+
+
+def _advice(name: str) -> Advice:
+    if name in ADVICE:
+        return ADVICE[name]
+    title = CATALOGUE[name].title if name in CATALOGUE else name.replace("_", " ")
+    return Advice(title, "see the diagnosis report of the last run")
+
+
+def trends(rows: Iterable[DiagnosisRow]) -> list[RigTrend]:
+    """One :class:`RigTrend` per rig name, sorted by name; rows in time order."""
+    by_rig: dict[str, list[DiagnosisRow]] = {}
+    for row in rows:
+        by_rig.setdefault(row.rig_name, []).append(row)
+    return [rig_trend(by_rig[name]) for name in sorted(by_rig)]
+
+
+def rig_trend(rows: Sequence[DiagnosisRow]) -> RigTrend:
+    """The series of one rig's diagnoses (in time order), against its latest rig file."""
+    if not rows:
+        raise ValueError("no diagnosis to trend")
+    latest = rows[-1].rig_hash
+    kept = tuple(r for r in rows if r.rig_hash == latest)
+    earlier = len(rows) - len(kept)
+    notes: tuple[str, ...] = ()
+    if earlier:
+        notes = (
+            f"{earlier} earlier diagnoses used another version of the rig file "
+            f"(multipliers are relative to it): left out, {len(kept)} trended",
+        )
+    values = list(dict.fromkeys(c.name for r in kept for c in r.calibration))
+    effects = list(
+        dict.fromkeys(h.effect for r in kept for h in r.hypotheses if "+" not in h.effect)
+    )
+    series = [_value_series(name, kept) for name in values]
+    series += [_effect_series(name, kept) for name in effects]
+    return RigTrend(kept[0].rig_name, kept, tuple(series), earlier, notes)
+
+
+def _times(rows: Sequence[DiagnosisRow], runs: list[int]) -> IntArray:
+    stamps = [rows[i].start_ns for i in runs]
+    return np.array([-1 if s is None else s for s in stamps], dtype=np.int64)
+
+
+class _Fit(NamedTuple):
+    slope: float
+    interval: tuple[float, float]
+    intercept: float
+    p_value: float
+    significant: bool
+    first: float  # the line at the first used run
+    last: float  # the line at the last used run
+
+
+def _fit(x: FloatArray, y: FloatArray) -> _Fit:
+    """Theil-Sen line and Kendall's test of ``y`` against the run number ``x``."""
+    fitted = stats.theilslopes(y, x, alpha=CONFIDENCE)
+    slope, intercept = float(fitted.slope), float(fitted.intercept)
+    low, high = float(fitted.low_slope), float(fitted.high_slope)
+    p_value = _trend_p_value(y, y - slope * x)
+    significant = (low > 0.0 or high < 0.0) and p_value < SIGNIFICANCE
+    return _Fit(
+        slope,
+        (low, high),
+        intercept,
+        p_value,
+        significant,
+        intercept + slope * float(x[0]),
+        intercept + slope * float(x[-1]),
+    )
+
+
+def _trend_p_value(y: FloatArray, residuals: FloatArray) -> float:
+    """Two-sided p-value of the Mann-Kendall trend test of ``y`` (in run order).
+
+    The variance of Kendall's S is widened for day-to-day correlation: by
+    ``1 + 2 (n - 3) / n * rho_1``, ``rho_1`` the lag-1 autocorrelation of the ranks of the
+    detrended series when positive (Hamed and Rao, J. Hydrol. 204, 1998, eq. 18 at lag 1).
+    Ties in ``y`` count 0 in S; a continuity correction of 1.
+    """
+    n = y.size
+    signs = np.sign(y[None, :] - y[:, None])
+    S = float(np.triu(signs, 1).sum())
+    _, ties = np.unique(y, return_counts=True)
+    variance = (n * (n - 1) * (2 * n + 5) - float((ties * (ties - 1) * (2 * ties + 5)).sum())) / 18
+    ranks = stats.rankdata(residuals)
+    centred = ranks - ranks.mean()
+    denominator = float(centred @ centred)
+    rho = float(centred[1:] @ centred[:-1]) / denominator if denominator > 0 else 0.0
+    variance *= 1.0 + 2.0 * (n - 3) / n * max(rho, 0.0)
+    if variance <= 0.0 or S == 0.0:
+        return 1.0
+    z = (abs(S) - 1.0) / math.sqrt(variance)
+    return float(2.0 * stats.norm.sf(z))
+
+
+def _no_fit() -> _Fit:
+    nan = math.nan
+    return _Fit(nan, (nan, nan), nan, nan, False, nan, nan)
+
+
+def _value_series(name: str, rows: Sequence[DiagnosisRow]) -> Series:
+    runs: list[int] = []
+    values: list[float] = []
+    used: list[bool] = []
+    sigma = math.nan
+    for index, row in enumerate(rows):
+        value = next((c for c in row.calibration if c.name == name), None)
+        if value is None:
+            continue
+        runs.append(index)
+        values.append(value.multiplier)
+        used.append(identified(value.prior_sigma, value.posterior_sigma))
+        sigma = value.prior_sigma  # one rig file: one tolerance
+    mask = np.array(used, dtype=bool)
+    run_numbers = np.array(runs, dtype=np.int64)
+    multipliers = np.array(values, dtype=float)
+    band = (math.exp(-sigma), math.exp(sigma))
+    movement, finding, fit = Movement.TOO_FEW, None, _no_fit()
+    if mask.sum() >= MIN_RUNS:
+        x = run_numbers[mask].astype(float)
+        y = np.log(multipliers[mask])
+        fit = _fit(x, y)
+        movement, finding = _judge_value(name, y, sigma, fit)
+    return Series(
+        name=name,
+        kind="value",
+        runs=run_numbers,
+        times_ns=_times(rows, runs),
+        values=multipliers,
+        used=mask,
+        named=np.zeros(mask.shape, dtype=bool),
+        band=band,
+        slope=fit.slope,
+        interval=fit.interval,
+        intercept=fit.intercept,
+        p_value=fit.p_value,
+        movement=movement,
+        finding=finding,
+    )
+
+
+def _judge_value(
+    name: str, logs: FloatArray, sigma: float, fit: _Fit
+) -> tuple[Movement, str | None]:
+    """Drift, offset or steady, and the line in words (module docstring)."""
+    advice = _advice(name)
+    count = logs.size
+    tolerance = f"tolerance ±{100 * sigma:.0f} %"
+    change = fit.last - fit.first
+    if fit.significant and abs(change) >= MIN_CHANGE * sigma:
+        outside = abs(fit.last) > sigma
+        where = (
+            f"{tolerance}, now {'above' if fit.last > 0 else 'below'} it" if outside else tolerance
+        )
+        return Movement.DRIFT, (
+            f"{advice.words} {_moved(change)} over {count} runs ({where}): {advice.cause}"
+        )
+    above, below = int((logs > sigma).sum()), int((logs < -sigma).sum())
+    if (off := max(above, below)) >= OFFSET_SHARE * count:
+        runs = "every run" if off == count else f"{off} of {count} runs"
+        return Movement.OFFSET, (
+            f"{advice.words} sits {_offset(float(np.median(logs)))} in {runs} ({tolerance}): "
+            "update the rig file"
+        )
+    return Movement.STEADY, None
+
+
+def _moved(log_change: float) -> str:
+    """A move of a log multiplier in words: ``fell 12 %``, ``rose 3.4 times``."""
+    factor = math.exp(log_change)
+    if factor >= 2.0:
+        return f"rose {factor:.1f} times"
+    if factor <= 0.5:
+        return f"fell to {factor:.2g} of its first value"
+    return f"{'rose' if factor > 1 else 'fell'} {100 * abs(factor - 1.0):.0f} %"
+
+
+def _offset(log_level: float) -> str:
+    """Where a log multiplier sits: ``60 % above the rig file`` or ``at 0.2 of its value``."""
+    factor = math.exp(log_level)
+    if factor >= 2.0 or factor <= 0.5:
+        return f"at {factor:.2g} times the rig file's value"
+    return f"{100 * abs(factor - 1.0):.0f} % {'above' if factor > 1 else 'below'} the rig file"
+
+
+def _effect_series(name: str, rows: Sequence[DiagnosisRow]) -> Series:
+    runs: list[int] = []
+    strengths: list[float] = []
+    named: list[bool] = []
+    for index, row in enumerate(rows):
+        hypothesis = next((h for h in row.hypotheses if h.effect == name), None)
+        if hypothesis is None:
+            continue  # not fitted in that run
+        runs.append(index)
+        strengths.append(math.log10(hypothesis.held_out_improvement))
+        named.append(name in row.effects)
+    run_numbers = np.array(runs, dtype=np.int64)
+    values = np.array(strengths, dtype=float)
+    named_mask = np.array(named, dtype=bool)
+    used = np.ones(values.shape, dtype=bool)
+    movement, finding, fit = Movement.TOO_FEW, None, _no_fit()
+    if values.size >= MIN_RUNS:
+        fit = _fit(run_numbers.astype(float), values)
+        movement, finding = _judge_effect(name, values, named_mask, fit)
+    return Series(
+        name=name,
+        kind="effect",
+        runs=run_numbers,
+        times_ns=_times(rows, runs),
+        values=values,
+        used=used,
+        named=named_mask,
+        band=None,
+        slope=fit.slope,
+        interval=fit.interval,
+        intercept=fit.intercept,
+        p_value=fit.p_value,
+        movement=movement,
+        finding=finding,
+    )
+
+
+def _judge_effect(
+    name: str, strengths: FloatArray, named: BoolArray, fit: _Fit
+) -> tuple[Movement, str | None]:
+    """Grew or steady (module docstring)."""
+    last_third = named[-max(1, math.ceil(named.size / 3)) :]
+    rise = fit.last - fit.first
+    if (
+        fit.significant
+        and fit.slope > 0
+        and rise >= MIN_GROWTH
+        and last_third.sum() >= NAMED_SHARE * last_third.size
+    ):
+        advice = _advice(name)
+        return Movement.GREW, (
+            f"{advice.words} grew over {strengths.size} runs (it cuts the held-out error "
+            f"{_times_text(fit.first)} -> {_times_text(fit.last)}; named in "
+            f"{int(last_third.sum())} of the last {last_third.size}): {advice.cause}"
+        )
+    return Movement.STEADY, None
+
+
+def _times_text(log10_improvement: float) -> str:
+    factor = 10.0**log10_improvement
+    return f"{factor:.0f}x" if factor >= 10 else f"{factor:.1f}x"

@@ -1,0 +1,137 @@
+"""A rig's trend: silent on steady rigs, a plain line for each thing that wore."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+import math
+
+import numpy as np
+import pytest
+
+from brake_hil.diagnosis.calibration import BORE_COMPLIANCE, UNCERTAIN
+from brake_hil.physics.catalogue import CATALOGUE
+from brake_hil.results.trend import (
+    ADVICE,
+    MIN_RUNS,
+    Movement,
+    identified,
+    rig_trend,
+    trends,
+)
+from test.results.fleets import real_document, rows, steady_fleet, wearing_fleet
+
+
+def test_a_steady_rig_gets_no_line_in_at_least_99_percent_of_fleets() -> None:
+    # 200 steady fleets of 30 runs: values at offsets within their band with heavy-tailed,
+    # day-to-day correlated scatter up to a third of the tolerance, effects steady (named or
+    # not). Measured 2026-11-25: 2 of these 200 fleets got a line (1.0 %); 13 of 2000 fleets
+    # with seeds 0-1999 (0.65 %).
+    noisy = [seed for seed in range(200) if rig_trend(rows(steady_fleet(_rng(seed)))).findings]
+    assert len(noisy) <= 2, noisy
+
+
+def _rng(seed: int) -> np.random.Generator:
+    return np.random.default_rng(seed)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_a_wearing_rig_gets_a_line_for_each_thing_that_wore(seed: int) -> None:
+    trend = rig_trend(rows(wearing_fleet(_rng(10_000 + seed), 40)))
+    found = {s.name: s for s in trend.series if s.finding is not None}
+    assert set(found) == {"caliper_stiffness", "air_fraction", "seal_stick_slip"}
+    caliper = found["caliper_stiffness"]
+    assert caliper.movement is Movement.DRIFT
+    assert caliper.finding is not None
+    assert caliper.finding.startswith("caliper stiffness fell 1")
+    assert caliper.finding.endswith("over 40 runs (tolerance ±25 %): check the caliper mounting")
+    assert caliper.interval[1] < 0
+    air = found["air_fraction"].finding
+    assert air is not None and air.startswith("fluid air fraction rose")
+    assert "now above it" in air and air.endswith("air in the fluid: bleed the circuit")
+    seal = found["seal_stick_slip"]
+    assert seal.movement is Movement.GREW
+    assert seal.finding is not None and seal.finding.startswith(
+        "seal stick-slip grew over 40 runs"
+    )
+    assert seal.finding.endswith(": seal wear")
+    assert trend.summary()[:3] == list(trend.findings)
+
+
+def test_the_fitted_line_follows_the_drift() -> None:
+    trend = rig_trend(rows(wearing_fleet(_rng(7), 40)))
+    caliper = next(s for s in trend.series if s.name == "caliper_stiffness")
+    line = caliper.line()
+    assert line[0] == pytest.approx(1.0, abs=0.03)
+    assert line[-1] == pytest.approx(0.88, abs=0.03)
+    assert caliper.band == pytest.approx((math.exp(-0.25), math.exp(0.25)))
+
+
+def test_a_value_off_the_rig_file_in_every_run_says_update_the_rig_file() -> None:
+    fleet = steady_fleet(_rng(3), 20)
+    for number, run in enumerate(fleet):
+        run.logs["valve_resistance"] = math.log(1.6) + 0.01 * (-1) ** number
+        run.identified["valve_resistance"] = True
+    trend = rig_trend(rows(fleet))
+    [line] = [s.finding for s in trend.series if s.finding]
+    assert line == (
+        "needle-valve resistance sits 60 % above the rig file in every run "
+        "(tolerance ±40 %): update the rig file"
+    )
+
+
+def test_with_too_few_runs_nothing_is_said() -> None:
+    trend = rig_trend(rows(wearing_fleet(_rng(1), MIN_RUNS - 1)))
+    assert trend.findings == ()
+    assert all(s.movement is Movement.TOO_FEW for s in trend.series)
+    assert trend.summary()[0] == f"too few runs to say ({MIN_RUNS - 1} diagnoses, 5 needed)"
+
+
+def test_a_value_the_runs_do_not_identify_is_not_trended() -> None:
+    fleet = wearing_fleet(_rng(2), 30)
+    for run in fleet:
+        run.identified["caliper_stiffness"] = False
+    trend = rig_trend(rows(fleet))
+    caliper = next(s for s in trend.series if s.name == "caliper_stiffness")
+    assert caliper.movement is Movement.TOO_FEW and caliper.finding is None
+    assert any(
+        line.startswith("identified in too few runs to say: caliper") for line in trend.summary()
+    )
+
+
+def test_only_the_latest_rig_file_is_trended() -> None:
+    old = rows(steady_fleet(_rng(4), 10), rig_hash="old" * 20)
+    new = rows(steady_fleet(_rng(5), 12))
+    trend = rig_trend([*old, *new])
+    assert len(trend.rows) == 12 and trend.earlier == 10
+    assert trend.summary()[-1].startswith("10 earlier diagnoses used another version")
+
+
+def test_trends_are_one_per_rig_sorted_by_name() -> None:
+    mixed = rows(steady_fleet(_rng(6), 6), rig="rig B") + rows(steady_fleet(_rng(8), 6))
+    assert [t.rig for t in trends(mixed)] == ["rig B", "test rig"]
+
+
+def test_every_calibrated_value_and_effect_has_its_advice() -> None:
+    values = {u.name for u in (*UNCERTAIN, BORE_COMPLIANCE)}
+    assert values | set(CATALOGUE) == set(ADVICE)
+
+
+def test_identified_is_the_calibrations_own_rule() -> None:
+    calibration = real_document()["calibration"]
+    judged = {
+        name
+        for name, prior in calibration["prior_sigma"].items()
+        if not identified(prior, calibration["posterior_sigma"][name])
+    }
+    assert judged == set(calibration["not_identified"])
+
+
+def test_a_constant_series_is_steady() -> None:
+    fleet = steady_fleet(_rng(9), 12)
+    for run in fleet:
+        run.logs = dict.fromkeys(run.logs, 0.0)
+        run.identified = dict.fromkeys(run.identified, True)
+        run.strengths = dict.fromkeys(run.strengths, 0.0)
+    trend = rig_trend([replace(r, effects=()) for r in rows(fleet)])
+    assert trend.findings == ()
+    assert trend.summary() == ["no value or effect left its band over 12 runs"]
