@@ -65,6 +65,7 @@ from brake_hil.app.chain import (  # noqa: E402
     start_node,
     stop_node,
     thread_cpu_seconds,
+    wait_until_quiet,
 )
 from brake_hil.cli.chain import add_layout_arguments  # noqa: E402
 from brake_hil.runtime import Histogram  # noqa: E402
@@ -327,6 +328,8 @@ def soak(
             time.sleep(1.0)  # in flight: the last predictions, the recorder's queues
         for node in reversed(nodes):
             if node.name not in exit_codes:
+                if node.name == "recorder" and (out / "soak").is_dir():
+                    wait_until_quiet(out / "soak")  # as the launcher: it has caught up
                 timeout_s = CONTAINER_STOP_S if node.is_container else 10.0
                 exit_codes[node.name] = stop_node(node, timeout_s)
     cpu = {

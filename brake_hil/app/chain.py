@@ -64,6 +64,7 @@ __all__ = [
     "LAYOUTS",
     "DEFAULT_RECORDING",
     "PROJECT",
+    "SOURCE_MARGIN_S",
     "ChainResult",
     "NodeProcess",
     "Notice",
@@ -78,7 +79,13 @@ __all__ = [
     "start_node",
     "stop_node",
     "thread_cpu_seconds",
+    "wait_until_quiet",
 ]
+
+SOURCE_MARGIN_S = 60.0
+"""How long past the replay's own length the source is given to end (s): its wait for its
+subscribers (at most 30 s), its start delay (1 s) and its wait for their acknowledgements at
+the end (``common.ACK_WAIT_AT_END_S``, 20 s)."""
 
 PROJECT = Path(__file__).resolve().parents[2]
 DEFAULT_RECORDING = PROJECT / "bags" / "one_washer_lti"
@@ -486,7 +493,7 @@ def run_chain(
             nodes.extend(start_layout(plan, env, logs, layout))
             container = next(node for node in nodes if node.runs("pressure_source"))
             started = time.monotonic()
-            if not _wait_for_file(source_done, container, length_s / rate + 45.0):
+            if not _wait_for_file(source_done, container, length_s / rate + SOURCE_MARGIN_S):
                 code = container.returncode()
                 say(
                     f"pressure_source did not finish in time: stopping {container.name}"
@@ -499,7 +506,7 @@ def run_chain(
             player = nodes[-1]
             started = time.monotonic()
             try:
-                player.process.wait(length_s / rate + 45.0)
+                player.process.wait(length_s / rate + SOURCE_MARGIN_S)
             except subprocess.TimeoutExpired:
                 say("pressure_source did not finish in time: stopping it")
         time.sleep(1.0)  # the model drains, the comparator scores its last cycle

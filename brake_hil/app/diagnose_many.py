@@ -23,7 +23,7 @@ from brake_hil.app.recordings import find_recordings, mirrored_folder, rig_besid
 from brake_hil.app.results_db import DATABASE_NAME
 from brake_hil.errors import BrakeHilError
 from brake_hil.results.identity import RecordingIdentity, identify
-from brake_hil.results.store import open_store
+from brake_hil.results.store import ResultsStore, open_store
 
 __all__ = [
     "DiagnoseJob",
@@ -34,6 +34,7 @@ __all__ = [
     "record_outcome",
     "run_diagnose_many",
 ]
+
 
 @dataclass(frozen=True)
 class DiagnoseJob:
@@ -114,7 +115,9 @@ def diagnose_job(job: DiagnoseJob) -> RecordingDiagnosis:
     )
 
 
-def record_outcome(store: Any, job: DiagnoseJob, outcome: Outcome[RecordingDiagnosis]) -> None:
+def record_outcome(
+    store: ResultsStore, job: DiagnoseJob, outcome: Outcome[RecordingDiagnosis]
+) -> None:
     """Write one recording's outcome to ``store``: its diagnosis, or its failure."""
     if outcome.value is not None:
         store.record_diagnosis(outcome.value.identity, outcome.value.document)
@@ -163,6 +166,7 @@ def run_diagnose_many(
     if database is None:
         out.mkdir(parents=True, exist_ok=True)
     by_index = dict(enumerate(jobs))
+    refused: dict[int, Outcome[RecordingDiagnosis]] = {}
     with open_store(target) as store:
         if on_start is not None:
             on_start(len(jobs))
@@ -170,13 +174,14 @@ def run_diagnose_many(
         def finished(outcome: Outcome[RecordingDiagnosis]) -> None:
             try:
                 record_outcome(store, by_index[outcome.index], outcome)
-            except BrakeHilError as err:  # a document the store refuses: kept as a failure
-                store.record_failure(
-                    "diagnosis", by_index[outcome.index].recording, None, _reason(err)
-                )
+            except BrakeHilError as err:  # a diagnosis the store refuses is no result
+                outcome = Outcome(outcome.index, error=err)
+                refused[outcome.index] = outcome
+                record_outcome(store, by_index[outcome.index], outcome)
             if progress is not None:
                 progress(outcome)
 
         outcomes = parallel_map(diagnose_job, jobs, workers, finished)
-        database_path = Path(getattr(store, "path", target))
+        database_path = store.path
+    outcomes = [refused.get(outcome.index, outcome) for outcome in outcomes]
     return ManyResult(outcomes, jobs, database_path, time.perf_counter() - began)

@@ -450,10 +450,12 @@ class PressureSourceNode(Node):
         self._stop.set()
         self._thread.join(2.0)
         self.unacknowledged = False
-        if self.context.ok() and not common.wait_for_acks(self._outputs.values()):
+        ended_by_itself = self.state == "finished" and self.settings.exit_at_end
+        wait_s = common.ACK_WAIT_AT_END_S if ended_by_itself else common.ACK_WAIT_S
+        if self.context.ok() and not common.wait_for_acks(self._outputs.values(), wait_s):
             self.unacknowledged = True
             self.get_logger().warning(
-                f"subscribers had not acknowledged every sample after {common.ACK_WAIT_S:g} s: "
+                f"subscribers had not acknowledged every sample after {wait_s:g} s: "
                 "the slowest may miss the last ones"
             )
         if self.settings.statistics_file:

@@ -613,8 +613,10 @@ class ResultsStore:
         """Store that ``kind`` failed on a recording (status ``failed``, no metrics).
 
         The recording and rig file (``None``: none was found) are identified as far as they
-        can be (:func:`~brake_hil.results.identity.identify_loosely`). It replaces a run of
-        the same recording, rig file and tool version, as any run does: the latest counts.
+        can be (:func:`~brake_hil.results.identity.identify_loosely`). It replaces a failed
+        run of the same recording, rig file and tool version, never a good one: a good result
+        already recorded is not lost to a later attempt that failed (a full disk, a killed
+        worker); the command says that attempt failed. Returns the run kept.
 
         Raises:
             BrakeHilError: an unknown kind.
@@ -622,7 +624,15 @@ class ResultsStore:
         if kind not in KINDS:
             raise BrakeHilError(f"unknown kind of run {kind!r} (known: {', '.join(KINDS)})")
         recording = identify_loosely(recording_path, rig_path)
+        key = (kind, recording.content_hash, recording.rig_hash, __version__)
         with _transaction(self._connection) as db:
+            good = db.execute(
+                "SELECT id FROM runs WHERE kind = ? AND recording_hash = ? AND rig_hash = ? "
+                "AND tool_version = ? AND status = 'ok'",
+                key,
+            ).fetchone()
+            if good is not None:
+                return int(good[0])
             run = self._new_run(db, kind, recording, error=_one_line(error))
         return run
 

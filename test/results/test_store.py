@@ -341,3 +341,17 @@ def test_a_spoiled_document_is_stored_whole_or_refused_with_nothing_written(
                 for channel in model.values()
                 for v in channel.values()
             )
+
+
+def test_a_later_failed_attempt_never_replaces_a_good_result(store: ResultsStore) -> None:
+    from brake_hil.results.identity import identify
+    from test.conftest import PROJECT
+
+    bag = PROJECT / "bags" / "one_washer_open"
+    rig = PROJECT / "bags" / "one_washer_open.rig.yaml"
+    good = store.record_diagnosis(identify(bag, rig), real_document())
+    kept = store.record_failure("diagnosis", bag, rig, "worker killed")
+    assert kept == good
+    assert [row.run_id for row in store.diagnoses()] == [good] and store.failures() == []
+    failed = store.record_failure("diagnosis", bag, None, "no rig file beside it")
+    assert failed != good and len(store.failures()) == 1  # another rig file: its own run
