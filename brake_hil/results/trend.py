@@ -15,7 +15,9 @@ the data show one beyond doubt, one line in plain words:
   caliper mounting``;
 * **offset**: no drift, and at least :data:`OFFSET_SHARE` of the runs outside the band on one
   side: ``needle-valve resistance sits 60 % above the rig file in every run (tolerance
-  ±40 %): update the rig file``;
+  ±40 %): update the rig file``; unless the verdicts named, in most runs, an effect the LTI
+  model's value stands in for (:data:`STANDS_IN_FOR`: the seal's ``k_eh`` for stick-slip
+  friction, ...): then the line says so, and that the rig file is not what is wrong;
 * **grew**: an effect's strength rose by at least :data:`MIN_GROWTH` (log10) along a
   significant trend, and the verdict named it in at least :data:`NAMED_SHARE` of the last
   third of the runs: ``seal stick-slip grew over 30 runs (...): seal wear``.
@@ -51,6 +53,7 @@ from brake_hil.types import BoolArray, FloatArray, IntArray
 
 __all__ = [
     "ADVICE",
+    "STANDS_IN_FOR",
     "CONFIDENCE",
     "MIN_CHANGE",
     "MIN_GROWTH",
@@ -114,6 +117,17 @@ ADVICE: Final[Mapping[str, Advice]] = {
 }
 """Per calibrated value and effect (a test holds it to the calibration and the catalogue);
 the diagnosis report's ``RIG_CHECKS`` says in more words what to look at for an effect."""
+
+
+STANDS_IN_FOR: Final[Mapping[str, tuple[str, ...]]] = {
+    "effective_hydraulic_stiffness": ("seal_stick_slip", "seal_groove_asymmetry"),
+    "effective_hydraulic_damping": ("seal_stick_slip", "seal_groove_asymmetry"),
+    "air_fraction": ("entrained_air",),
+    "bore_compliance": ("entrained_air",),
+    "hose_stiffness": ("hose_compliance",),
+    "valve_resistance": ("orifice_flow",),
+}
+"""Calibrated LTI values and the effects whose misfit the calibration puts into them."""
 
 
 class Movement(StrEnum):
@@ -240,7 +254,8 @@ def rig_trend(rows: Sequence[DiagnosisRow]) -> RigTrend:
     effects = list(
         dict.fromkeys(h.effect for r in kept for h in r.hypotheses if "+" not in h.effect)
     )
-    series = [_value_series(name, kept) for name in values]
+    named = {e: sum(e in r.effects for r in kept) for r in kept for e in r.effects}
+    series = [_value_series(name, kept, named) for name in values]
     series += [_effect_series(name, kept) for name in effects]
     return RigTrend(kept[0].rig_name, kept, tuple(series), earlier, notes)
 
@@ -307,7 +322,10 @@ def _no_fit() -> _Fit:
     return _Fit(nan, (nan, nan), nan, nan, False, nan, nan)
 
 
-def _value_series(name: str, rows: Sequence[DiagnosisRow]) -> Series:
+def _value_series(
+    name: str, rows: Sequence[DiagnosisRow], named: Mapping[str, int] | None = None
+) -> Series:
+    """One calibrated value's series; ``named``: how many runs named each effect."""
     runs: list[int] = []
     values: list[float] = []
     used: list[bool] = []
@@ -329,7 +347,7 @@ def _value_series(name: str, rows: Sequence[DiagnosisRow]) -> Series:
         x = run_numbers[mask].astype(float)
         y = np.log(multipliers[mask])
         fit = _fit(x, y)
-        movement, finding = _judge_value(name, y, sigma, fit)
+        movement, finding = _judge_value(name, y, sigma, fit, _stood_in_for(name, rows, named))
     return Series(
         name=name,
         kind="value",
@@ -348,10 +366,25 @@ def _value_series(name: str, rows: Sequence[DiagnosisRow]) -> Series:
     )
 
 
+def _stood_in_for(
+    name: str, rows: Sequence[DiagnosisRow], named: Mapping[str, int] | None
+) -> str | None:
+    """The effect the value stands in for, named in most of ``rows``, in words with its count."""
+    for effect in STANDS_IN_FOR.get(name, ()):
+        count = (named or {}).get(effect, 0)
+        if count > len(rows) / 2:
+            return f"{_advice(effect).words} named in {count} of {len(rows)} runs"
+    return None
+
+
 def _judge_value(
-    name: str, logs: FloatArray, sigma: float, fit: _Fit
+    name: str, logs: FloatArray, sigma: float, fit: _Fit, stands_in: str | None = None
 ) -> tuple[Movement, str | None]:
-    """Drift, offset or steady, and the line in words (module docstring)."""
+    """Drift, offset or steady, and the line in words (module docstring).
+
+    ``stands_in``: an effect the value stands in for, named in most runs (an offset is then
+    the LTI model's stand-in for it, not a rig-file error).
+    """
     advice = _advice(name)
     count = logs.size
     tolerance = f"tolerance ±{100 * sigma:.0f} %"
@@ -367,9 +400,15 @@ def _judge_value(
     above, below = int((logs > sigma).sum()), int((logs < -sigma).sum())
     if (off := max(above, below)) >= OFFSET_SHARE * count:
         runs = "every run" if off == count else f"{off} of {count} runs"
+        cause = (
+            f"the calibrated LTI model stands in with it for the {stands_in}, "
+            "not a rig-file error"
+            if stands_in is not None
+            else "update the rig file"
+        )
         return Movement.OFFSET, (
             f"{advice.words} sits {_offset(float(np.median(logs)))} in {runs} ({tolerance}): "
-            "update the rig file"
+            f"{cause}"
         )
     return Movement.STEADY, None
 
