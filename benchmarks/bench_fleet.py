@@ -42,7 +42,7 @@ PROJECT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(PROJECT))
 
 from brake_hil.app.benchmark import CaseResult, run_cases  # noqa: E402
-from brake_hil.app.parallel import LOOPBACK, SERIAL, Workers  # noqa: E402
+from brake_hil.app.parallel import LOOPBACK, SERIAL, Workers, write_dask_config  # noqa: E402
 
 VARIANTS = {
     "serial": "serial (this process)",
@@ -86,7 +86,9 @@ def dask_apart(workers: int, log_dir: Path) -> Iterator[str]:
     scheduler_file = log_dir / "scheduler.json"
     common = ["--host", LOOPBACK, "--no-dashboard", "--dashboard-address", f"{LOOPBACK}:0"]
     common += ["--scheduler-file", str(scheduler_file)]
-    environment = dict(os.environ, PYTHONPATH=str(PROJECT))
+    # the embedded cluster's settings (LOCAL_CLUSTER_CONFIG), as a user would give a cluster
+    environment = dict(os.environ, PYTHONPATH=str(PROJECT), DASK_CONFIG=str(log_dir))
+    write_dask_config(log_dir)
     commands = [
         ["scheduler", "--port", "0", *common],
         ["worker", "--nworkers", str(workers), "--nthreads", "1", *common],

@@ -25,9 +25,10 @@ from dataclasses import dataclass
 from functools import partial
 import logging
 import os
+from pathlib import Path
 import socket
 import sys
-from typing import TYPE_CHECKING, Generic, TypeVar, cast
+from typing import TYPE_CHECKING, Any, Generic, TypeVar, cast
 import uuid
 
 from brake_hil.errors import BrakeHilError
@@ -37,6 +38,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "BLAS_THREAD_VARIABLES",
+    "LOCAL_CLUSTER_CONFIG",
     "LOOPBACK",
     "ONE_PER_CORE",
     "SCHEDULER_TIMEOUT_S",
@@ -48,6 +50,7 @@ __all__ = [
     "parallel_map",
     "values",
     "worker_count",
+    "write_dask_config",
 ]
 
 T = TypeVar("T")
@@ -61,6 +64,20 @@ BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THR
 """What ``brake_hil/__init__.py`` sets to 1 (unless the user set them) before numpy loads."""
 _OPENBLAS_PREFIXES = ("openblas", "scipy_openblas")  # scipy_: numpy's and scipy's wheels
 _OPENBLAS_SUFFIXES = ("", "64_")  # 64_: 64-bit integers (numpy's wheels)
+LOCAL_CLUSTER_CONFIG: dict[str, object] = {
+    # A worker holds only the task it runs, so a task that kills its worker takes no queued
+    # neighbour down with it (KilledWorker stays with its item).
+    "distributed.scheduler.worker-saturation": 1.0,
+    # Dask's defaults cost a diagnosis 31 % in a worker against this process (measured,
+    # 4 recordings, 1 worker: 47 s against 35 s): glibc told to give memory back at every
+    # 64 KiB free (MALLOC_TRIM_THRESHOLD_, 11 % of it), the statistical profiler sampling the
+    # task's stack every 10 ms, the event loop's 20 ms watchdog tick. Off here, 39-40 s.
+    "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
+    "distributed.worker.profile.enabled": False,
+    "distributed.admin.tick.interval": "1s",
+}
+"""Dask settings of the embedded ``LocalCluster``; a cluster of your own reads them from a
+YAML file in its Dask config folder (:func:`write_dask_config`)."""
 _DASK_LOG_LEVEL = "DASK_LOGGING__DISTRIBUTED"
 """Dask's log level in the worker processes a ``LocalCluster`` starts (read at their import)."""
 
@@ -198,6 +215,27 @@ def parallel_map(
     return cast(list[Outcome[R]], outcomes)
 
 
+def write_dask_config(folder: Path | str) -> Path:
+    """Write :data:`LOCAL_CLUSTER_CONFIG` as ``folder/brake_hil.yaml``, Dask's config format.
+
+    For a scheduler and workers started apart: put the file in their Dask config folder
+    (``~/.config/dask/``, or the folder ``$DASK_CONFIG`` names) before starting them.
+    """
+    import yaml
+
+    nested: dict[str, Any] = {}
+    for dotted, value in LOCAL_CLUSTER_CONFIG.items():
+        *parents, leaf = dotted.split(".")
+        node = nested
+        for parent in parents:
+            node = node.setdefault(parent, {})
+        node[leaf] = value
+    path = Path(folder).expanduser() / "brake_hil.yaml"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(yaml.safe_dump(nested, sort_keys=True), encoding="utf-8")
+    return path
+
+
 def values(outcomes: Sequence[Outcome[R]]) -> list[R]:
     """Every outcome's value, in order.
 
@@ -318,12 +356,10 @@ def _dask_client(workers: Workers, items: int) -> Iterator[Client]:
                 raise BrakeHilError(msg) from err
             yield client
         return
-    # worker-saturation 1: a worker holds only the task it runs, so a task that kills its
-    # worker takes no queued neighbour down with it (KilledWorker stays with its item). The
-    # scheduler's HTTP server (health, metrics; served without a dashboard too) takes a free
-    # port on loopback rather than 8787.
+    # LOCAL_CLUSTER_CONFIG: see there. The scheduler's HTTP server (health, metrics; served
+    # without a dashboard too) takes a free port on loopback rather than 8787.
     with (
-        dask.config.set({"distributed.scheduler.worker-saturation": 1.0}),
+        dask.config.set(LOCAL_CLUSTER_CONFIG),
         LocalCluster(  # type: ignore[no-untyped-call]
             n_workers=worker_count(workers.jobs, items),
             threads_per_worker=1,

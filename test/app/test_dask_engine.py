@@ -274,3 +274,30 @@ def test_the_command_line_exits_2_with_one_line_for_an_unreachable_scheduler() -
     assert done.returncode == 2, done.stderr
     assert done.stderr.count("\n") == 1 and address in done.stderr, done.stderr
     assert done.stderr.startswith("brake-hil regress: error: ")
+
+
+def worker_settings(_item: int) -> tuple[str | None, bool, str]:
+    """What a worker's own config and environment say (module level: workers import it)."""
+    import dask
+
+    return (
+        os.environ.get("MALLOC_TRIM_THRESHOLD_"),
+        bool(dask.config.get("distributed.worker.profile.enabled")),
+        str(dask.config.get("distributed.admin.tick.interval")),
+    )
+
+
+def test_workers_run_without_the_dask_defaults_that_slow_a_diagnosis(tmp_path: Path) -> None:
+    # The embedded cluster's workers: no 64 KiB malloc trim, no profiler, a 1 s tick.
+    settings = values(parallel_map(worker_settings, [0, 1], Workers(jobs=2)))
+    assert settings == [(None, False, "1s")] * 2
+    # The same settings for a cluster of one's own, as a Dask config file it reads.
+    import dask
+
+    path = parallel.write_dask_config(tmp_path)
+    read = dask.config.collect(paths=[str(path.parent)], env={})
+    for dotted, value in parallel.LOCAL_CLUSTER_CONFIG.items():
+        node = read
+        for part in dotted.split("."):
+            node = node[part]
+        assert node == value, dotted
