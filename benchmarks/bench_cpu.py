@@ -19,6 +19,8 @@ Variants:
   container) and the caliper model in its own.
 * ``two_process``: as ``after``, the source and the model in one process, the comparator and
   the recorder in another.
+* ``paired``: as ``two_process``, the model stepped on the source's thread right after each
+  sample (``paired_with_source``: one thread for the two 1 kHz loops).
 * ``one_process``: as ``after``, the four nodes in one process
   (``python -m brake_hil.nodes.container``: one rclpy context, one DDS participant, Fast DDS
   delivering inside the process). The process's CPU is the total; per node, the CPU of each
@@ -71,6 +73,7 @@ VARIANTS: dict[str, dict[str, Any]] = {
     "one_process": {"env": {}, "loops": {"spin_margin_us": 0}, "layout": "one-process"},
     "model_apart": {"env": {}, "loops": {"spin_margin_us": 0}, "layout": "model-apart"},
     "two_process": {"env": {}, "loops": {"spin_margin_us": 0}, "layout": "two-process"},
+    "paired": {"env": {}, "loops": {"spin_margin_us": 0}, "layout": "paired"},
 }
 THREADS = {
     "source-worker": "pressure_source",

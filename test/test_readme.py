@@ -31,6 +31,7 @@ LONG = (
     "brake-hil trend",
     "dask ",
     "out/lab",  # the virtual lab's walk-through: its recordings come from 'brake-hil fleet'
+    "write_dask_config",  # writes into the user's Dask config folder
 )
 NEVER = ("scripts/test.sh",)
 

@@ -14,8 +14,11 @@ checked against the batch model on the recorded input; it prints nothing (the co
 The ``layout`` says which nodes share a process (:data:`LAYOUTS`): ``processes`` (each its
 own, as above), ``one-process`` (the four in one process, ``python -m
 brake_hil.nodes.container``: one rclpy context, Fast DDS delivers between them inside the
-process) or ``model-apart`` (the source, comparator and recorder in one process, the caliper
-model in its own: its 1 kHz loop shares no GIL, the other three no loopback traffic). Each node
+process), ``model-apart`` (the source, comparator and recorder in one process, the caliper
+model in its own: its 1 kHz loop shares no GIL, the other three no loopback traffic),
+``two-process`` (the source and the model in one process, the comparator and the recorder in
+another) or ``paired`` (as ``two-process``, with the model stepped on the source's thread right
+after each sample: one thread for the two 1 kHz loops). Each node
 gets the same parameters from its own params file, started with the same environment; with a
 container the launcher waits for the source's statistics file (written as its replay ends)
 instead of the source's exit, and stops the container with SIGINT, which stops its nodes in the
@@ -62,6 +65,7 @@ from brake_hil.topics import (
 __all__ = [
     "DEFAULT_MODEL",
     "LAYOUTS",
+    "LAYOUT_PARAMETERS",
     "DEFAULT_RECORDING",
     "PROJECT",
     "SOURCE_MARGIN_S",
@@ -106,10 +110,21 @@ LAYOUTS: dict[str, dict[str, str]] = {
         "caliper_model": REALTIME_GROUP,
         "pressure_source": REALTIME_GROUP,
     },
+    "paired": {
+        "recorder": CONSUMERS_GROUP,
+        "comparator": CONSUMERS_GROUP,
+        "caliper_model": REALTIME_GROUP,
+        "pressure_source": REALTIME_GROUP,
+    },
 }
 """Which nodes share a process: node name -> the container's process name; a node not named
 runs in its own process. ``two-process``: the source and the model (the 1 kHz loops) in one,
-the comparator and the recorder in another."""
+the comparator and the recorder in another; ``paired``: as ``two-process``, the model stepped
+on the source's thread (:data:`LAYOUT_PARAMETERS`)."""
+LAYOUT_PARAMETERS: dict[str, dict[str, dict[str, Any]]] = {
+    "paired": {"caliper_model": {"paired_with_source": True}},
+}
+"""Node parameters a layout sets (over the plan's): layout -> node -> parameters."""
 CONTAINER_STOP_S = 100.0
 """How long the launcher gives the container to stop after SIGINT (s): the source's and the
 model's wait for acknowledgements (8 s each) and the recorder's catch-up (at most 60 s)."""
@@ -302,6 +317,8 @@ def start_layout(
         raise ValueError(f"unknown layout {layout!r} (layouts: {', '.join(LAYOUTS)})")
     priorities = dict(fifo_priority or {})
     groups = LAYOUTS[layout]
+    overrides = LAYOUT_PARAMETERS.get(layout, {})
+    plan = [(name, {**parameters, **overrides.get(name, {})}) for name, parameters in plan]
     processes: list[NodeProcess] = []
     for name, parameters in plan:
         group = groups.get(name)

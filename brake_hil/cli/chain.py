@@ -99,7 +99,8 @@ def add_layout_arguments(parser: argparse.ArgumentParser) -> None:
         choices=tuple(LAYOUTS),
         default="processes",
         help="which nodes share a process: processes (each its own), two-process (source and "
-        "model in one, comparator and recorder in another), model-apart (source, comparator "
+        "model in one, comparator and recorder in another), paired (as two-process, the model "
+        "stepped on the source's thread after each sample), model-apart (source, comparator "
         "and recorder in one process, the caliper model in its own), one-process (the four "
         "in python -m brake_hil.nodes.container: the least CPU, but the model's loop shares "
         "the GIL: period error and latency of milliseconds at p99)",

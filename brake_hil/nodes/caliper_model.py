@@ -12,8 +12,12 @@ equals the offline batch model on the same samples (``LiveModel.batch``: same eq
 start at the first sample). The tick's phase follows the input's arrival phase
 (:class:`~brake_hil.runtime.PhaseLock`), so a sample waits for its tick a fraction of a
 millisecond. That thread is the node's only Python thread (diagnostics are published from
-it too): nothing contends with it for the GIL at a deadline. So the node runs without an
-executor and without parameter services; its parameters are read-only, set at start.
+it too): nothing contends with it for the GIL at a deadline. With ``paired_with_source``
+(one container with a replaying source: the chain's ``--layout paired``) the source's thread
+runs the tick right after publishing each sample, so the two 1 kHz loops are one thread and
+never wait for each other's GIL; the loop's own thread takes over when the replay ends. So
+the node runs without an executor and without parameter services; its parameters are
+read-only, set at start.
 
 The model steps on the raw ``p_i`` it receives. (``brake-hil compare`` filters ``p_i`` with
 the seed's 30 Hz zero-phase low-pass first; that filter is not causal, so it cannot run live.
@@ -50,6 +54,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 import struct
 import sys
+import threading
 import time
 from typing import Any
 
@@ -109,6 +114,11 @@ class CaliperModelNode(common.LoopNode):
         )
         settings = common.declare_settings(self, CaliperModelSettings)
         self.settings = settings
+        if settings.paired_with_source and own_process:
+            raise BrakeHilError(
+                "paired_with_source needs the pressure_source in the same process "
+                "(python -m brake_hil.nodes.container, or the chain's --layout paired)"
+            )
         period_ns = round(settings.loop_period * 1e9)
         try:
             hold_mode = HoldMode(settings.hold_mode)
@@ -150,6 +160,7 @@ class CaliperModelNode(common.LoopNode):
         # matched wait_for_subscribers readers: a source that waits for its p_i subscribers
         # then starts only when the predictions of its first sample have their readers.
         self._input: common.PolledInput | None = None
+        self._subscribing = threading.Lock()
         self._subscribe_when_matched()
         self._report_every = max(1, round(settings.diagnostics_period * 1e9 / period_ns))
         self._relock_every = max(1, round(1e9 / period_ns))
@@ -163,6 +174,7 @@ class CaliperModelNode(common.LoopNode):
             realtime_priority=settings.realtime_priority,
             on_error=self._on_loop_error,
             idle=self._take_input,  # samples are taken in while spinning to the deadline
+            while_held=self._subscribe_when_matched,  # paired: subscribed before the source plays
             name="caliper-model-loop",
         )
         self.get_logger().info(f"{self.model.description} from {self.model.path}")
@@ -172,17 +184,39 @@ class CaliperModelNode(common.LoopNode):
             # would hold them off, delaying arrivals until after its tick, and the phase lock
             # would chase them).
             set_process_realtime_priority(min(99, settings.realtime_priority + 1))
-        self._loop.start()
+        self._loop.start(held=settings.paired_with_source)
+
+    # -- paired with the source (one container) -----------------------------------------
+
+    def follow(self, deadline_ns: int, wake_ns: int) -> None:
+        """One tick on the caller's thread: the paired source, right after its publishes.
+
+        ``deadline_ns``, ``wake_ns``: the source's tick (monotonic); the model's period error
+        is then the source's. Fast DDS delivers inside the process before ``publish``
+        returns, so the tick takes the sample just published.
+        """
+        self._loop.drive(deadline_ns, wake_ns)
+
+    def unpair(self) -> None:
+        """The paired source stopped replaying: the loop's own thread ticks from now on."""
+        self._loop.release()
 
     # -- the loop (its own thread) -----------------------------------------------------
 
     def _subscribe_when_matched(self) -> bool:
-        """Subscribe to ``p_i`` once the prediction publishers have their readers."""
-        wanted = self.settings.wait_for_subscribers
-        if all(publisher.get_subscription_count() >= wanted for publisher in self._outputs):
-            self._input = common.PolledInput(self, MASTER_CYLINDER_PRESSURE)
-            return True
-        return False
+        """Subscribe to ``p_i`` once the prediction publishers have their readers.
+
+        Called by the loop's thread (while spinning, or while held for a paired source) and by
+        the tick, which may be on the paired source's thread: once, under a lock.
+        """
+        with self._subscribing:
+            if self._input is not None:
+                return True
+            wanted = self.settings.wait_for_subscribers
+            if all(publisher.get_subscription_count() >= wanted for publisher in self._outputs):
+                self._input = common.PolledInput(self, MASTER_CYLINDER_PRESSURE)
+                return True
+            return False
 
     def _take_input(self) -> None:
         """Queue every input sample the middleware holds, with its receive time."""
@@ -229,7 +263,8 @@ class CaliperModelNode(common.LoopNode):
         if new_fault or result.state_changed or slot // self._report_every != self._last_report:
             self._last_report = slot // self._report_every
             self._report()
-        if self._phase_lock is not None and slot // self._relock_every != self._last_relock:
+        relock = slot // self._relock_every != self._last_relock and not self._loop.held
+        if self._phase_lock is not None and relock:
             self._last_relock = slot // self._relock_every
             phase = self._phase_lock.propose(self._loop.phase_ns)
             if phase is not None:
@@ -297,6 +332,8 @@ class CaliperModelNode(common.LoopNode):
             ("phase_shifts", counters.phase_shifts),
             ("timer_slack_1ns", self._loop.timer_slack),
             ("sched_fifo", self._loop.realtime),
+            ("stepped_by", "pressure_source's thread" if self._loop.held else "own loop"),
+            ("driven_ticks", self._loop.driven_ticks),
         ]
         now = time.monotonic_ns()
         state = self._runner.state
@@ -368,7 +405,7 @@ class CaliperModelNode(common.LoopNode):
             self.get_logger().warning(
                 f"subscribers had not acknowledged every prediction after {common.ACK_WAIT_S:g} s"
             )
-        summary = self.statistics.summary()
+        summary = {**self.statistics.summary(), "driven_ticks": self._loop.driven_ticks}
         counters = self.statistics.counters
         self.get_logger().info(
             f"{counters.samples} samples in, {counters.predictions} predictions out, "

@@ -34,6 +34,11 @@ layouts (``python -m brake_hil.nodes.chain --layout``) put some nodes in a conta
 rest in processes of their own (``two-process``: the two 1 kHz loops in one container, the
 comparator and the recorder in another).
 
+A ``caliper_model`` with ``paired_with_source`` is stepped by the replaying source's thread
+right after each sample it publishes (:func:`pair_source_and_model`): the two 1 kHz loops are
+then one thread, with no GIL between them; the model's own loop takes over when the replay
+ends. Without a replaying source in the container that is bad parameters (exit 2).
+
 A node whose work ends by itself (the source at the end of a replay with ``exit_at_end``, a
 loop that failed, a recorder whose write failed) is closed and destroyed at once, as its
 process would exit; the others run on. SIGINT or SIGTERM stops the rest in the order the
@@ -220,6 +225,22 @@ def _build(name: str, cli_args: Sequence[str]) -> Member:
     return Member(name, RecorderNode(cli_args), None)
 
 
+def pair_source_and_model(members: Sequence[Member]) -> None:
+    """Step a ``paired_with_source`` caliper model on the replaying source's thread.
+
+    Raises:
+        BrakeHilError: the model asks for it and no replaying source is in the container.
+    """
+    by_name = {member.name: member.node for member in members}
+    model = by_name.get("caliper_model")
+    if model is None or not model.settings.paired_with_source:
+        return
+    source = by_name.get("pressure_source")
+    if source is None:
+        raise BrakeHilError("paired_with_source needs the pressure_source in this container")
+    source.pair(model.follow, model.unpair)
+
+
 def _ros_argument_errors() -> tuple[type[BaseException], ...]:
     """What rclpy raises on ROS arguments rcl cannot parse (unknown flags, a bad params file)."""
     from rclpy.impl.implementation_singleton import rclpy_implementation as implementation
@@ -294,6 +315,13 @@ def run(specs: Sequence[NodeSpec], stop: threading.Event, hurry: threading.Event
                 refused = True
                 hurry.set()  # close the nodes built so far, without waiting
                 break
+        if not refused:
+            try:
+                pair_source_and_model(members)
+            except BrakeHilError as err:
+                print(f"{NAME}: error: caliper_model: {_problem(err)}", file=sys.stderr)
+                refused = True
+                hurry.set()
         if not refused:
             name_threads()
             print(f"{NAME}: running {', '.join(m.name for m in members)}", flush=True)

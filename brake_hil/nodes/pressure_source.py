@@ -126,6 +126,11 @@ class PressureSourceNode(Node):
         self._last_status: Any = None
         self._rearm = threading.Event()
         self.stale_reports_ms: list[float] = []  # last good frame to STALE published (ms)
+        # Paired nodes (one container): ticked after each replayed sample, told at its end.
+        self._followers: list[Callable[[int, int], None]] = []
+        self._on_replay_end: list[Callable[[], None]] = []
+        self._pair_lock = threading.Lock()
+        self._replay_over = False
         if self.mode == "replay":
             self._prepare_replay(
                 settings.recording, settings.stamp_mode, settings.publish_measured
@@ -253,7 +258,37 @@ class PressureSourceNode(Node):
             self.state = "waiting for subscribers"
             time.sleep(0.02)
 
+    def pair(self, follow: Callable[[int, int], None], on_end: Callable[[], None]) -> None:
+        """Run ``follow(deadline_ns, wake_ns)`` on the replay thread after each sample.
+
+        For a node in the same process (the caliper model, ``paired_with_source``): one thread
+        for both 1 kHz loops. ``on_end()`` is called once when the replay stops (at its end, on
+        a stop or a failure; at once if it has already stopped).
+
+        Raises:
+            BrakeHilError: the source is not replaying (a CAN DAQ's frames come when they come).
+        """
+        if self.mode != "replay":
+            raise BrakeHilError(f"a pressure_source in mode {self.mode} cannot be paired")
+        with self._pair_lock:
+            over = self._replay_over
+            if not over:
+                self._followers.append(follow)
+                self._on_replay_end.append(on_end)
+        if over:
+            on_end()
+
     def _replay(self) -> None:
+        try:
+            self._play()
+        finally:
+            with self._pair_lock:
+                self._replay_over = True
+                ends, self._on_replay_end = self._on_replay_end, []
+            for end in ends:
+                end()
+
+    def _play(self) -> None:
         set_timer_slack(1)
         set_realtime_priority(self.settings.realtime_priority)
         self._wait_for_graph()
@@ -272,6 +307,7 @@ class PressureSourceNode(Node):
         builders = [self._builders[spec] for spec in specs]
         stats = self.statistics
         spin_ns = 1000 * self.settings.spin_margin_us
+        followers = self._followers  # the list itself: a node paired later is seen
         self.state = "playing"
         while not self._stop.is_set():
             shift = self.passes * pass_duration
@@ -279,12 +315,15 @@ class PressureSourceNode(Node):
             for index, deadline in enumerate(deadlines):
                 if self._stop.is_set():
                     break
-                wake = sleep_until(deadline + shift, spin_ns)
-                stats.add("period_error", wake - deadline - shift)
+                due = deadline + shift
+                wake = sleep_until(due, spin_ns)
+                stats.add("period_error", wake - due)
                 stamp = stamp_list[index] + stamp_shift
                 for column, publisher, build in zip(columns, publishers, builders):
                     publisher.publish(build(stamp, column[index]))
                 self.published += 1
+                for follow in followers:
+                    follow(due, wake)
             else:
                 self.passes += 1
                 if self.settings.loop:

@@ -197,6 +197,11 @@ class CaliperModelSettings:
     wait_for_subscribers: int = parameter(
         0, "subscribe to p_i once each prediction publisher has matched this many readers"
     )
+    paired_with_source: bool = parameter(
+        False,
+        "step on the replaying pressure_source's thread, right after each sample it publishes "
+        "(in one container with it; the loop's own thread takes over when the replay ends)",
+    )
 
 
 @dataclass(frozen=True)

@@ -112,6 +112,10 @@ def set_process_realtime_priority(priority: int) -> int:
 # --------------------------------------------------------------------------- the loop
 
 
+HELD_POLL_S = 0.01
+"""How often a held :class:`DeadlineLoop`'s thread calls its ``while_held`` (s)."""
+
+
 class Tick(NamedTuple):
     """One pass of a :class:`DeadlineLoop`."""
 
@@ -132,10 +136,17 @@ class DeadlineLoop:
             skipped slots are counted.
         realtime_priority: ``SCHED_FIFO`` priority of the thread (0: normal scheduling).
         idle: called on every turn of the spin before a deadline (work that may run early).
+        while_held: called by the loop's thread every :data:`HELD_POLL_S` while it is held
+            (work that must not wait for the first driven tick, e.g. subscribing).
         clock, sleep: injectable for tests.
 
     An exception raised by ``tick`` stops the loop; it is kept in :attr:`error` and passed
     to ``on_error``.
+
+    *Held* (``start(held=True)``): the thread starts but waits, and another thread runs the
+    ticks with :meth:`drive` at its own deadlines (a replaying source stepping the model on its
+    own thread, :mod:`brake_hil.nodes.container`), with the same accounting; :meth:`release`
+    hands the ticks back to the loop's own grid from then on.
     """
 
     def __init__(
@@ -148,6 +159,7 @@ class DeadlineLoop:
         realtime_priority: int = 0,
         on_error: Callable[[BaseException], None] | None = None,
         idle: Callable[[], object] | None = None,
+        while_held: Callable[[], object] | None = None,
         clock: Clock = time.monotonic_ns,
         sleep: Sleep = time.sleep,
         name: str = "deadline-loop",
@@ -161,9 +173,13 @@ class DeadlineLoop:
         self._priority = realtime_priority
         self._on_error = on_error
         self._idle = idle
+        self._while_held = while_held
         self._clock = clock
         self._sleep = sleep
         self._stop = threading.Event()
+        self._released = threading.Event()  # set: the loop's own thread runs the ticks
+        self._released.set()
+        self._driven_slot = 0
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
         self._phase_request: int | None = None
         self._first_deadline_ns: int | None = None
@@ -172,21 +188,64 @@ class DeadlineLoop:
         self.realtime = False  # SCHED_FIFO obtained
         self.timer_slack = False  # 1 ns timer slack obtained
 
-    def start(self, first_deadline_ns: int | None = None) -> None:
-        """Start the thread; the first deadline defaults to one period from now."""
+    def start(self, first_deadline_ns: int | None = None, *, held: bool = False) -> None:
+        """Start the thread; the first deadline defaults to one period from now.
+
+        ``held``: the thread waits until :meth:`release` (ticks come from :meth:`drive`
+        meanwhile); its first deadline is then one period after the release.
+        """
         self._first_deadline_ns = first_deadline_ns
+        if held:
+            self._released.clear()
         self._thread.start()
 
     def stop(self, timeout_s: float = 2.0) -> None:
         """Ask the loop to stop after its current tick and wait for it (idempotent)."""
         self._stop.set()
+        self._released.set()
         if self._thread.is_alive() and threading.current_thread() is not self._thread:
             self._thread.join(timeout_s)
 
     @property
     def running(self) -> bool:
-        """True while the thread runs."""
+        """True while the thread runs (held or not)."""
         return self._thread.is_alive()
+
+    @property
+    def held(self) -> bool:
+        """True while the ticks come from :meth:`drive`, not the loop's own grid."""
+        return not self._released.is_set()
+
+    @property
+    def driven_ticks(self) -> int:
+        """Ticks run by :meth:`drive` (on the driver's thread) so far."""
+        return self._driven_slot
+
+    def release(self) -> None:
+        """End the hold: the loop's thread runs the ticks from one period from now."""
+        self._released.set()
+
+    def drive(self, deadline_ns: int, wake_ns: int) -> bool:
+        """Run one tick now, on the calling thread, while the loop is held.
+
+        ``deadline_ns``: when the caller's own tick was due; ``wake_ns``: when it began
+        (monotonic). Counted as the loop's own ticks are (period error, tick work, late ticks,
+        overruns). An exception from ``tick`` stops the loop as in its own thread. Returns False
+        (and does nothing) once the loop is released, stopped or failed.
+        """
+        if self._released.is_set() or self._stop.is_set():
+            return False
+        if self._phase is None:
+            self._phase = deadline_ns % self.period_ns
+        try:
+            self._run_tick(self._driven_slot, deadline_ns, wake_ns, 0)
+        except BaseException as err:  # noqa: BLE001 - handed to the owner, the loop ends
+            self._fail(err)
+            self._stop.set()
+            self._released.set()
+            return False
+        self._driven_slot += 1
+        return True
 
     def request_phase(self, phase_ns: int) -> None:
         """Move the grid so deadlines fall at ``phase_ns`` modulo the period (ns, monotonic).
@@ -208,40 +267,57 @@ class DeadlineLoop:
     def _run(self) -> None:
         self.timer_slack = set_timer_slack(1)
         self.realtime = set_realtime_priority(self._priority)
+        while not self._released.wait(HELD_POLL_S):
+            if self._while_held is not None:
+                self._while_held()
+        if self._stop.is_set():
+            return
+        if self._driven_slot:  # after a hold: the grid starts one period from the release
+            self._first_deadline_ns = self._clock() + self.period_ns
         try:
             self._loop(None)
         except BaseException as err:  # noqa: BLE001 - handed to the owner, the thread ends
-            self.error = err
-            if self._on_error is not None:
-                self._on_error(err)
+            self._fail(err)
+
+    def _fail(self, err: BaseException) -> None:
+        self.error = err
+        if self._on_error is not None:
+            self._on_error(err)
+
+    def _run_tick(self, slot: int, deadline: int, wake: int, skipped: int) -> int:
+        """Count one tick, run it; the time it ended (ns)."""
+        stats = self.statistics
+        counters = stats.counters
+        counters.ticks += 1
+        counters.ticks_skipped += skipped
+        lateness = wake - deadline
+        if lateness >= LATE_TICK_NS:
+            counters.late_ticks += 1
+        stats.add("period_error", lateness)
+        self._tick(Tick(slot, deadline, wake, skipped))
+        end = self._clock()
+        stats.add("tick_work", end - wake)
+        if end > deadline + (skipped + 1) * self.period_ns:
+            counters.overruns += 1
+        return end
 
     def _loop(self, count: int | None) -> None:
         period = self.period_ns
-        stats = self.statistics
-        counters = stats.counters
+        counters = self.statistics.counters
         deadline = self._first_deadline_ns
         if deadline is None:
             deadline = self._clock() + period
         self._phase = deadline % period
-        slot = 0
+        slot = self._driven_slot  # after a hold, the slots go on from the driven ones
         ticks = 0
         while not self._stop.is_set() and (count is None or ticks < count):
             wake = sleep_until(deadline, self.spin_ns, self._clock, self._sleep, self._idle)
             lateness = wake - deadline
             skipped = lateness // period if lateness >= period else 0
-            counters.ticks += 1
-            counters.ticks_skipped += skipped
-            if lateness >= LATE_TICK_NS:
-                counters.late_ticks += 1
-            stats.add("period_error", lateness)
-            self._tick(Tick(slot, deadline, wake, skipped))
-            end = self._clock()
-            stats.add("tick_work", end - wake)
+            end = self._run_tick(slot, deadline, wake, skipped)
             ticks += 1
             slot += skipped + 1
             deadline += (skipped + 1) * period
-            if end > deadline:
-                counters.overruns += 1
             requested = self._phase_request
             if requested is not None:
                 self._phase_request = None

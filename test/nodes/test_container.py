@@ -1,13 +1,14 @@
 """The chain's four nodes in one process (``python -m brake_hil.nodes.container``).
 
 Real nodes, real DDS on loopback (the launcher's environment: ``LOCALHOST`` and the project's
-profile), on a 4 s slice of ``bags/one_washer_lti``: the chain with nodes
-sharing processes (``python -m brake_hil.nodes.chain --one-process``, ``--layout model-apart``,
-``--layout two-process``) predicts and records every sample, exits 0 and leaves an MCAP that
-reads back; bad parameters of one node end the container with exit 2
-and one line, after the nodes already built were closed; SIGTERM mid-run stops every node in
-order and loses nothing the source had published. Counts and contracts only, with generous
-deadlines (never timing: the CI runner is a busy 2-core machine).
+profile), on a 4 s slice of ``bags/one_washer_lti``: the chain with nodes sharing processes
+(``python -m brake_hil.nodes.chain --one-process``, ``--layout model-apart``, ``--layout
+two-process``, ``--layout paired``) predicts and records every sample, exits 0 and leaves an
+MCAP that reads back (paired: every sample stepped on the source's thread); bad parameters
+of one node end the container with exit 2 and one line, after the nodes already built were
+closed; SIGTERM mid-run stops every node in order and loses nothing the source had
+published. Counts and contracts only, with generous deadlines (never timing: the CI runner is
+a busy 2-core machine).
 """
 
 from __future__ import annotations
@@ -80,6 +81,10 @@ def _mcap_counts(bag: Path) -> dict[str, int]:
             ["--layout", "two-process"],
             {"container-realtime": ("pressure_source",), "container-consumers": ("recorder",)},
         ),
+        (
+            ["--layout", "paired"],
+            {"container-realtime": ("pressure_source",), "container-consumers": ("recorder",)},
+        ),
     ],
 )
 def test_a_chain_with_shared_processes_predicts_and_records_every_sample(
@@ -104,6 +109,9 @@ def test_a_chain_with_shared_processes_predicts_and_records_every_sample(
         text = (tmp_path / "logs" / f"{process}.log").read_text()
         for member in members:  # the container says it ran the node
             assert re.search(rf"running .*{member}", text), (process, member, text[-2000:])
+    model = json.loads((tmp_path / "caliper_model.json").read_text())
+    # paired: every sample stepped on the source's thread, one tick each; else none was
+    assert model["driven_ticks"] == (SAMPLES if "paired" in options else 0), model
     comparator = json.loads((tmp_path / "comparator.json").read_text())
     assert all(entry["paired"] == SAMPLES for entry in comparator["metrics"].values())
     assert comparator["metrics"]["p_b"]["cycles"] > 0
@@ -149,6 +157,34 @@ def test_bad_parameters_of_one_node_exit_2_with_one_line(tmp_path: Path) -> None
     assert lines == [expected], done.stderr
     assert (tmp_path / "bag" / "metadata.yaml").is_file()  # the recorder built first was closed
     assert "container: recorder stopped" in done.stdout
+
+
+def test_a_model_paired_with_no_source_beside_it_exits_2_with_one_line(tmp_path: Path) -> None:
+    recorder = _params(tmp_path, "recorder", {"output_dir": str(tmp_path), "bag_name": "bag"})
+    done = _container(
+        ["--node", "recorder", "--ros-args", "--params-file", recorder]
+        + ["--node", "caliper_model", "--ros-args", "-p", "paired_with_source:=true"],
+        tmp_path,
+    )
+    assert done.returncode == 2, done.stdout + done.stderr
+    expected = (
+        "container: error: caliper_model: paired_with_source needs the pressure_source in "
+        "this container"
+    )
+    assert done.stderr.strip().splitlines() == [expected], done.stderr
+    assert (tmp_path / "bag" / "metadata.yaml").is_file()  # the recorder built first was closed
+    alone = subprocess.run(
+        [sys.executable, "-m", "brake_hil.nodes.caliper_model"]
+        + ["--ros-args", "-p", "paired_with_source:=true"],
+        env=ros_environment(),
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+    assert alone.returncode == 2, alone.stdout + alone.stderr
+    lines = alone.stderr.strip().splitlines()
+    assert len(lines) == 1 and "paired_with_source needs the pressure_source" in lines[0], lines
 
 
 @pytest.mark.parametrize(

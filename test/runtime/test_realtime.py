@@ -161,6 +161,56 @@ def test_the_loop_thread_stops_and_keeps_an_error_of_its_tick() -> None:
     assert isinstance(loop.error, RuntimeError) and errors == [loop.error]
 
 
+def test_a_held_loop_ticks_only_when_driven_counts_alike_and_takes_over_on_release() -> None:
+    ticks: list[Tick] = []
+    loop = DeadlineLoop(ticks.append, 1 * MS, 100_000)
+    loop.start(held=True)
+    time.sleep(0.05)  # a held loop's thread runs no tick of its own
+    assert loop.running and loop.held and ticks == []
+    now = time.monotonic_ns()
+    for k in range(5):  # the driver's own deadlines, one woken 2 ms late
+        assert loop.drive(now + k * MS, now + k * MS + (2 * MS if k == 3 else 10_000))
+    assert [t.slot for t in ticks] == [0, 1, 2, 3, 4] and loop.driven_ticks == 5
+    assert [t.deadline_ns - now for t in ticks] == [k * MS for k in range(5)]
+    counters = loop.statistics.counters
+    assert counters.ticks == 5 and counters.late_ticks == 1
+    assert loop.statistics.total["period_error"].max_ns == 2 * MS
+    released = time.monotonic_ns()
+    loop.release()
+    assert not loop.held and not loop.drive(now, now)  # released: the driver is ignored
+    deadline = time.monotonic() + 30.0  # generous: a busy runner
+    while len(ticks) < 10 and time.monotonic() < deadline:
+        time.sleep(0.01)
+    loop.stop()
+    assert len(ticks) >= 10 and loop.error is None
+    own = ticks[5:]
+    assert own[0].slot == 5 and all(b.slot > a.slot for a, b in zip(own, own[1:]))
+    assert own[0].deadline_ns >= released + 1 * MS  # its own grid, from the release on
+
+
+def test_a_driven_tick_that_fails_stops_the_loop_and_keeps_the_error() -> None:
+    errors: list[BaseException] = []
+
+    def tick(t: Tick) -> None:
+        if t.slot == 1:
+            raise RuntimeError("boom")
+
+    loop = DeadlineLoop(tick, 1 * MS, 100_000, on_error=errors.append)
+    loop.start(held=True)
+    now = time.monotonic_ns()
+    assert loop.drive(now, now) and not loop.drive(now + MS, now + MS)
+    assert not loop.drive(now + 2 * MS, now + 2 * MS)  # stopped: nothing runs any more
+    loop.stop()
+    assert not loop.running and isinstance(loop.error, RuntimeError) and errors == [loop.error]
+
+
+def test_a_held_loop_stops_without_a_release() -> None:
+    loop = DeadlineLoop(lambda t: None, 1 * MS, 100_000)
+    loop.start(held=True)
+    loop.stop()
+    assert not loop.running and loop.statistics.counters.ticks == 0
+
+
 # --------------------------------------------------------------------------- phase lock
 
 
