@@ -22,7 +22,7 @@ from brake_hil.topics import OUTPUT_CHANNELS, PREDICTED_OUTPUTS, QUANTITY_TOPICS
 from brake_hil.virtual_rig.effects import make_effect
 from brake_hil.virtual_rig.excitation import seed_pulsing
 from brake_hil.virtual_rig.simulator import simulate_rig
-from test.conftest import CONFIG
+from test.conftest import CONFIG, PROJECT
 
 T0 = 1_763_000_000_000_000_000  # ns
 RIG = CONFIG / "rig_default.yaml"
@@ -69,5 +69,19 @@ def test_diagnose_names_the_effect_in_a_split_recorder_mcap(tmp_path: Path) -> N
         timeout=600,
     )
     assert result.returncode == 0, result.stderr
-    verdict = json.loads((out / "diagnosis.json").read_text())["verdict"]
+    document = json.loads((out / "diagnosis.json").read_text())
+    verdict = document["verdict"]
     assert verdict["effects"] == ["orifice_flow"], verdict
+    # The results tests build their fleets on a kept diagnosis.json: it must still have the
+    # shape the command writes (renew it with brake-hil diagnose bags/one_washer_open).
+    kept = json.loads(KEPT_DIAGNOSIS.read_text())
+    assert set(document) == set(kept)
+    for part in ("calibration", "verdict", "baseline", "improved"):
+        fixed = set(document[part]) - {"unexplained_form"}  # only when unexplained
+        assert fixed == set(kept[part]) - {"unexplained_form"}, part
+    assert set(document["hypotheses"][0]) == set(kept["hypotheses"][0])
+    metrics = document["baseline"]["metrics"]["F_k"]
+    assert metrics.keys() == kept["baseline"]["metrics"]["F_k"].keys()
+
+
+KEPT_DIAGNOSIS = PROJECT / "test" / "results" / "diagnosis_one_washer_open.json"

@@ -1,10 +1,11 @@
 """Synthetic fleets of diagnoses: steady rigs and wearing ones, built from a real diagnosis.
 
 A fleet is one rig's runs in time order. Each run's calibrated values and effect strengths
-are drawn around the real ``out/diagnosis/diagnosis.json``'s (its prior sigmas, its nine
-single hypotheses). Steady: every value at an offset within its band with heavy-tailed,
-day-to-day correlated scatter, effects steady (named or not). Wearing: caliper stiffness
-falls 12 %, the air fraction rises out of its band, seal stick-slip grows until it is named.
+are drawn around a real diagnosis's (``diagnosis_one_washer_open.json`` beside this module:
+``brake-hil diagnose bags/one_washer_open``; its prior sigmas, its nine single hypotheses).
+Steady: every value at an offset within its band with heavy-tailed, day-to-day correlated
+scatter, effects steady (named or not). Wearing: caliper stiffness falls 12 %, the air
+fraction rises out of its band, seal stick-slip grows until it is named.
 """
 
 from __future__ import annotations
@@ -20,8 +21,10 @@ import numpy as np
 
 from brake_hil.results.store import CalibrationValue, DiagnosisRow, HypothesisRow
 
-PROJECT = Path(__file__).resolve().parents[2]
-REAL_DIAGNOSIS = PROJECT / "out" / "diagnosis" / "diagnosis.json"
+REAL_DIAGNOSIS = Path(__file__).with_name("diagnosis_one_washer_open.json")
+"""``brake-hil diagnose bags/one_washer_open``'s ``diagnosis.json`` (2026-11-26), kept with the
+tests: a fresh clone has no ``out/`` (the test that it is still what the command writes is in
+``test_store.py``)."""
 DAY_NS = 86_400 * 10**9
 START_NS = 1_700_000_000 * 10**9
 
