@@ -11,6 +11,7 @@ from collections.abc import Mapping
 import json
 from pathlib import Path
 
+from brake_hil.files import check_output_file
 from brake_hil.results.identity import identify, identify_with_model
 from brake_hil.results.store import open_store
 
@@ -30,8 +31,9 @@ ChannelMetrics = Mapping[str, Mapping[str, float]]
 
 
 def _opened(database: Path | str) -> Path | str:
+    """A database path checked through the output door (its folder made, writable)."""
     if isinstance(database, Path):
-        database.parent.mkdir(parents=True, exist_ok=True)
+        check_output_file(database)
     return database
 
 
@@ -39,7 +41,8 @@ def check_database(database: Path | str | None) -> None:
     """Open the database (made if missing) before the work: a bad one is refused first.
 
     Raises:
-        BrakeHilError: a URL of another scheme, or a file that is not a results database.
+        BrakeHilError: a URL of another scheme, a file that is not a results database, or a
+            path that cannot be written (one line naming it).
     """
     if database is not None:
         with open_store(_opened(database)):

@@ -125,10 +125,12 @@ def diagnose_one(args: argparse.Namespace) -> int:
     """
     from brake_hil.app.diagnose import DIAGNOSIS_STEPS, run_diagnose
     from brake_hil.app.results_db import DATABASE_NAME, append_diagnosis, check_database
+    from brake_hil.files import check_output_folder
 
     rig = args.rig if args.rig is not None else rig_beside(args.recording)
     out = args.out if args.out is not None else Path("out") / recording_name(args.recording)
     database = args.db or (args.out or Path("out")) / DATABASE_NAME
+    check_output_folder(out)  # before the database in it: the folder's own problem named
     check_database(database)
     if args.rig is None:
         print(f"rig file: {rig} (beside the recording; --rig to choose another)")
@@ -426,13 +428,13 @@ def regress(args: argparse.Namespace) -> int:
     if result.checks:
         for line in format_checks(result.checks):
             print(line)
-    if result.updated:
-        print(f"baseline written to {result.baseline_path}")
     if args.db and result.results:
         from brake_hil.app.results_db import append_regression
 
         replays = {Path(r.recording): r.metrics for r in result.results.values()}
         print(f"results appended to {append_regression(replays, result.model_file, args.db)}")
+    if result.updated:
+        print(f"baseline written to {result.baseline_path}")
         return 0
     if result.moved:
         print(f"{len(result.moved)} metrics moved past their tolerance or have no baseline")

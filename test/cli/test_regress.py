@@ -123,6 +123,19 @@ def test_regress_and_compare_append_to_the_results_database_once_per_recording(
         metrics = connection.execute("SELECT count(*) FROM metrics").fetchone()[0]
     assert runs == [("comparison", "ok"), ("regression", "ok")]
     assert metrics == 2 * 3  # one model, three channels, per run
+    moved_baseline = json.loads((PROJECT / "bags" / "baseline.json").read_text())
+    moved_baseline["model_file"] = str(CONFIG / "rig_default.yaml")  # relative to bags/
+    for bag in moved_baseline["bags"].values():
+        bag["metrics"]["p_b"]["ptp_ratio_pct"] -= 3.0
+    moved_path = tmp_path / "moved.json"
+    moved_path.write_text(json.dumps(moved_baseline))
+    moved = regress(BAG, "--baseline", moved_path, "--db", database)  # appended, still a fail
+    assert moved.returncode == 1 and f"results appended to {database}" in moved.stdout
+    assert "metrics moved past their tolerance" in moved.stdout
     refused = regress(BAG, "--baseline", PROJECT / "bags" / "baseline.json", "--db", "pg://x/y")
     assert refused.returncode == 2 and refused.stderr.count("\n") == 1
     assert "pg://x/y" in refused.stderr
+    shipped = PROJECT / "bags" / "baseline.json"
+    unwritable = regress(BAG, "--baseline", shipped, "--db", "/proc/x.db")
+    assert unwritable.returncode == 2 and unwritable.stderr.count("\n") == 1, unwritable.stderr
+    assert "/proc/x.db" in unwritable.stderr and "Traceback" not in unwritable.stderr
