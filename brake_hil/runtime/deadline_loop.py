@@ -267,14 +267,14 @@ class DeadlineLoop:
     def _run(self) -> None:
         self.timer_slack = set_timer_slack(1)
         self.realtime = set_realtime_priority(self._priority)
-        while not self._released.wait(HELD_POLL_S):
-            if self._while_held is not None:
-                self._while_held()
-        if self._stop.is_set():
-            return
-        if self._driven_slot:  # after a hold: the grid starts one period from the release
-            self._first_deadline_ns = self._clock() + self.period_ns
         try:
+            while not self._released.wait(HELD_POLL_S):
+                if self._while_held is not None:
+                    self._while_held()
+            if self._stop.is_set():
+                return
+            if self._driven_slot:  # after a hold: the grid starts one period from the release
+                self._first_deadline_ns = self._clock() + self.period_ns
             self._loop(None)
         except BaseException as err:  # noqa: BLE001 - handed to the owner, the thread ends
             self._fail(err)

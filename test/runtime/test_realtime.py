@@ -204,6 +204,22 @@ def test_a_driven_tick_that_fails_stops_the_loop_and_keeps_the_error() -> None:
     assert not loop.running and isinstance(loop.error, RuntimeError) and errors == [loop.error]
 
 
+def test_a_failure_while_held_stops_the_loop_and_keeps_the_error() -> None:
+    errors: list[BaseException] = []
+
+    def subscribe() -> None:
+        raise RuntimeError("no context")
+
+    loop = DeadlineLoop(
+        lambda t: None, 1 * MS, 100_000, on_error=errors.append, while_held=subscribe
+    )
+    loop.start(held=True)
+    deadline = time.monotonic() + 30.0
+    while loop.running and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert not loop.running and isinstance(loop.error, RuntimeError) and errors == [loop.error]
+
+
 def test_a_held_loop_stops_without_a_release() -> None:
     loop = DeadlineLoop(lambda t: None, 1 * MS, 100_000)
     loop.start(held=True)
