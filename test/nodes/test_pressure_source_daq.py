@@ -114,8 +114,10 @@ def daq_run(tmp_path_factory: pytest.TempPathFactory) -> DaqRun:
             # the node has read the pty (a busy runner's reader lags), then silence
             _wait_for(lambda: len(collector.samples[P_I.name]) >= len(sent) // 2, 30.0)
             time.sleep(0.5)
-            adapter.close()  # the adapter vanishes
+            # taken before the close: on a busy runner the node can see the loss and report it
+            # before this thread runs again (a report received "before" the loss, failed once)
             lost_at_ns = time.time_ns()
+            adapter.close()  # the adapter vanishes
             time.sleep(0.5)
             adapter = SlcanPty(link)  # and comes back
             reopened = _wait_for(
