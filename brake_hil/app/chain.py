@@ -100,22 +100,18 @@ NODE_ORDER = ("recorder", "comparator", "caliper_model", "pressure_source")
 """The chain's nodes in start order (readers before their writers)."""
 REALTIME_GROUP = "container-realtime"
 CONSUMERS_GROUP = "container-consumers"
+_LOOPS_APART_FROM_CONSUMERS = {
+    "recorder": CONSUMERS_GROUP,
+    "comparator": CONSUMERS_GROUP,
+    "caliper_model": REALTIME_GROUP,
+    "pressure_source": REALTIME_GROUP,
+}
 LAYOUTS: dict[str, dict[str, str]] = {
     "processes": {},
     "one-process": dict.fromkeys(NODE_ORDER, CONTAINER),
     "model-apart": dict.fromkeys(("recorder", "comparator", "pressure_source"), CONTAINER),
-    "two-process": {
-        "recorder": CONSUMERS_GROUP,
-        "comparator": CONSUMERS_GROUP,
-        "caliper_model": REALTIME_GROUP,
-        "pressure_source": REALTIME_GROUP,
-    },
-    "paired": {
-        "recorder": CONSUMERS_GROUP,
-        "comparator": CONSUMERS_GROUP,
-        "caliper_model": REALTIME_GROUP,
-        "pressure_source": REALTIME_GROUP,
-    },
+    "two-process": _LOOPS_APART_FROM_CONSUMERS,
+    "paired": _LOOPS_APART_FROM_CONSUMERS,
 }
 """Which nodes share a process: node name -> the container's process name; a node not named
 runs in its own process. ``two-process``: the source and the model (the 1 kHz loops) in one,
