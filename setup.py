@@ -38,6 +38,7 @@ setup(
         "matplotlib>=3.7",
         "tqdm>=4.60",
         "distributed>=2024.1",  # Dask: work over many recordings (LocalCluster or a scheduler)
+        "psycopg[binary]>=3.1",  # the results database on a PostgreSQL server (--db postgresql://)
     ],
     extras_require={
         "ros": ROS_WHEELS,
@@ -47,6 +48,8 @@ setup(
             "ruff>=0.5",
             "mypy>=1.8",
             "types-PyYAML",
+            # a private PostgreSQL server for the results database's tests (its binaries bundled)
+            "pgserver>=0.1.4",
             # the ROS 2 linters' standard tests (test/test_flake8.py, test/test_pep257.py):
             # the Kilted wheels carry no flake8/pydocstyle, which the distro's debs bring
             "ros-kilted-ament-flake8",

@@ -72,7 +72,7 @@ class ManyResult:
 
     outcomes: list[Outcome[RecordingDiagnosis]]
     jobs: list[DiagnoseJob]
-    database: Path
+    database: str  # its file, or its URL with the password masked
     seconds: float
 
     @property
@@ -147,7 +147,7 @@ def run_diagnose_many(
         rig: one rig file for every recording; ``None``: each recording's own beside it.
         out: output folder; each recording gets a folder under it.
         workers: where the diagnoses run.
-        database: results database (path or ``sqlite:///`` URL); ``None``:
+        database: results database (path, ``sqlite:///`` or ``postgresql://`` URL); ``None``:
             ``out/results.sqlite``.
         progress: called with each recording's outcome as it finishes.
         on_start: called with the number of recordings before the first is diagnosed.
@@ -182,6 +182,6 @@ def run_diagnose_many(
                 progress(outcome)
 
         outcomes = parallel_map(diagnose_job, jobs, workers, finished)
-        database_path = store.path
+        database_name = store.name
     outcomes = [refused.get(outcome.index, outcome) for outcome in outcomes]
-    return ManyResult(outcomes, jobs, database_path, time.perf_counter() - began)
+    return ManyResult(outcomes, jobs, database_name, time.perf_counter() - began)

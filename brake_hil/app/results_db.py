@@ -1,8 +1,10 @@
 """The results database's door for the commands: what each appends, in one place.
 
 ``diagnose`` appends every diagnosis (default database: ``results.sqlite`` in its output
-folder); ``compare`` and ``regress`` append their metrics when ``--db`` is given. Each
-recording is one transaction (:mod:`brake_hil.results.store`).
+folder); ``compare`` and ``regress`` append their metrics when ``--db`` is given (a file,
+``sqlite:///PATH`` or ``postgresql://...``). Each recording is one transaction
+(:mod:`brake_hil.results.store`); each function returns the database's name (its file, or
+its URL with the password masked).
 """
 
 from __future__ import annotations
@@ -41,37 +43,38 @@ def check_database(database: Path | str | None) -> None:
     """Open the database (made if missing) before the work: a bad one is refused first.
 
     Raises:
-        BrakeHilError: a URL of another scheme, a file that is not a results database, or a
-            path that cannot be written (one line naming it).
+        BrakeHilError: a URL of another scheme, a file or server database that is not a
+            results database, a server not reached, or a path that cannot be written (one
+            line naming it).
     """
     if database is not None:
         with open_store(_opened(database)):
             pass
 
 
-def append_diagnosis(recording: Path, rig: Path, json_path: Path, database: Path | str) -> Path:
-    """Append one ``diagnosis.json`` to the database; the database's path."""
+def append_diagnosis(recording: Path, rig: Path, json_path: Path, database: Path | str) -> str:
+    """Append one ``diagnosis.json`` to the database."""
     document = json.loads(json_path.read_text(encoding="utf-8"))
     with open_store(_opened(database)) as store:
         store.record_diagnosis(identify(recording, rig), document)
-        return store.path
+        return store.name
 
 
 def append_comparison(
     recording: Path, rig: Path, metrics: ChannelMetrics, database: Path | str
-) -> Path:
+) -> str:
     """Append ``compare``'s metrics (the rig file's LTI model) to the database."""
     with open_store(_opened(database)) as store:
         store.record_metrics("comparison", identify(recording, rig), {"model": metrics})
-        return store.path
+        return store.name
 
 
 def append_regression(
     replays: Mapping[Path, ChannelMetrics], model_file: Path, database: Path | str
-) -> Path:
+) -> str:
     """Append each replayed recording's metrics (``regress``), one transaction each."""
     with open_store(_opened(database)) as store:
         for recording, metrics in replays.items():
             identity = identify_with_model(recording, model_file)
             store.record_metrics("regression", identity, {"model": metrics})
-        return store.path
+        return store.name

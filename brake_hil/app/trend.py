@@ -3,7 +3,7 @@
 Reads the results database (:mod:`brake_hil.results.store`), trends every rig's diagnoses in
 time order (:mod:`brake_hil.results.trend`) and writes ``trend.html`` with a figure per rig
 (:mod:`brake_hil.report.trend_report`) into the output folder (default: ``trend/`` beside the
-database).
+database file; for a PostgreSQL database, ``trend/`` in the working directory).
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from pathlib import Path
 from brake_hil.errors import BrakeHilError
 from brake_hil.files import check_output_folder
 from brake_hil.report.trend_report import write_trend_report
-from brake_hil.results.store import database_path, open_store
+from brake_hil.results.store import open_store
 from brake_hil.results.trend import RigTrend, trends
 
 __all__ = ["TrendResult", "default_output", "run_trend"]
@@ -25,19 +25,19 @@ class TrendResult:
     """What :func:`run_trend` found and wrote.
 
     Attributes:
-        database: the results database read.
+        database: the results database read (its file, or its URL with the password masked).
         rigs: one trend per rig, sorted by rig name.
         report_path: ``trend.html``.
     """
 
-    database: Path
+    database: str
     rigs: tuple[RigTrend, ...]
     report_path: Path
 
 
-def default_output(database: Path) -> Path:
-    """``trend/`` beside the database file."""
-    return database.parent / "trend"
+def default_output(database: Path | None) -> Path:
+    """``trend/`` beside the database file; for a server's database (``None``), here."""
+    return database.parent / "trend" if database is not None else Path("trend")
 
 
 def run_trend(
@@ -46,7 +46,8 @@ def run_trend(
     """Trend the stored diagnoses of every rig (or of ``rig``) and write the report.
 
     Args:
-        database: the results database (a path or ``sqlite:///path``); it must exist.
+        database: the results database (a path, ``sqlite:///path`` or
+            ``postgresql://...``); it must exist.
         rig: only this rig name (``None``: every rig).
         out: the report's folder (``None``: :func:`default_output`).
 
@@ -55,14 +56,14 @@ def run_trend(
             diagnosis (of ``rig``).
         OutputError: the output folder cannot be written.
     """
-    path = database_path(database)
-    with open_store(path, create=False) as store:
+    with open_store(database, create=False) as store:
         rows = store.diagnoses(rig)
         known = store.rigs()
+        name, path = store.name, store.path
     if not rows:
         listed = ", ".join(repr(name) for name in known) or "none"
         what = f"of rig {rig!r} " if rig is not None else ""
-        raise BrakeHilError(f"{path}: no diagnosis {what}stored (rigs: {listed})")
+        raise BrakeHilError(f"{name}: no diagnosis {what}stored (rigs: {listed})")
     folder = check_output_folder(out if out is not None else default_output(path))
     rigs = tuple(trends(rows))
-    return TrendResult(path, rigs, write_trend_report(rigs, folder, path))
+    return TrendResult(name, rigs, write_trend_report(rigs, folder, name))

@@ -99,7 +99,8 @@ def add_database_argument(parser: argparse.ArgumentParser, default: str) -> None
     parser.add_argument(
         "--db",
         metavar="URL",
-        help=f"results database to append to: an SQLite file or sqlite:///PATH ({default})",
+        help="results database to append to: an SQLite file, sqlite:///PATH, or a PostgreSQL "
+        f"server's postgresql://USER@HOST:PORT/DBNAME (libpq's URL; {default})",
     )
 
 
@@ -169,13 +170,15 @@ def _add_trend_parser(commands: argparse._SubParsersAction) -> None:  # type: ig
         "--db",
         required=True,
         metavar="URL",
-        help="the results database: an SQLite file or sqlite:///PATH",
+        help="the results database: an SQLite file, sqlite:///PATH, or "
+        "postgresql://USER@HOST:PORT/DBNAME",
     )
     trend.add_argument("--rig", metavar="NAME", help="only this rig (its name in the rig file)")
     trend.add_argument(
         "--out",
         type=Path,
-        help="folder for trend.html and its figures (default: trend/ beside the database)",
+        help="folder for trend.html and its figures (default: trend/ beside the database "
+        "file; for PostgreSQL, trend/ here)",
     )
 
 

@@ -66,7 +66,7 @@ def figure_name(rig: str, taken: set[str] | None = None) -> str:
 
 
 def write_trend_report(
-    trends: Sequence[RigTrend], out: Path, database: Path | None = None
+    trends: Sequence[RigTrend], out: Path, database: Path | str | None = None
 ) -> Path:
     """Write ``trend.html`` and one PNG per rig into ``out``; return the page's path.
 
@@ -278,7 +278,9 @@ without a trend, says the rig file is off. A series with fewer than {MIN_RUNS} u
 says nothing. On steady synthetic rigs these rules wrote a line for under 1 % of fleets.</p>"""
 
 
-def _html(trends: Sequence[RigTrend], figures: Sequence[str], database: Path | None) -> str:
+def _html(
+    trends: Sequence[RigTrend], figures: Sequence[str], database: Path | str | None
+) -> str:
     when = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
     source = html.escape(str(database)) if database is not None else "not given"
     sections = "\n".join(_rig_section(t, f) for t, f in zip(trends, figures))

@@ -1,7 +1,9 @@
 """The results database: every diagnosis, regression and comparison, one row set per run.
 
-SQLite from the standard library, one file (a path, or ``sqlite:///path``; no other database
-is built in). Tables (schema :data:`SCHEMA_VERSION`, in ``meta`` with the application's name):
+Two backends, one store (:mod:`.backends`): SQLite from the standard library, one file (a
+path, or ``sqlite:///path``; the default, beside the outputs), or a PostgreSQL server
+(``postgresql://USER@HOST:PORT/NAME``, libpq's URL, e.g. a lab's shared database). Tables
+(schema :data:`SCHEMA_VERSION`, in ``meta`` with the application's name):
 
 * ``recordings``: a recording by its content hash (:mod:`brake_hil.results.identity`), its
   last path, first and last log time (ns) and duration (s);
@@ -20,29 +22,34 @@ is built in). Tables (schema :data:`SCHEMA_VERSION`, in ``meta`` with the applic
 
 A run is written in one transaction after its document was checked, so a refused document or
 an error mid-write leaves nothing of it; a failed command is kept as ``failed``, never with
-metrics. Several processes may append at once: the file is in WAL mode and a writer waits
-up to :data:`BUSY_TIMEOUT_S` for another's transaction.
+metrics. Several processes may append at once: an SQLite file is in WAL mode and a writer
+waits up to :data:`BUSY_TIMEOUT_S` for another's transaction; on PostgreSQL two writers of
+the same run key take turns on the key's advisory lock, others write side by side. A
+database that is not ours (no ``meta`` of this application) or of a newer schema is refused.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from datetime import UTC, datetime
 import json
 import math
 from pathlib import Path
-import re
-import sqlite3
-import stat
 from types import TracebackType
 from typing import Any, Final
 
 from brake_hil import __version__
 from brake_hil.analysis.comparison import SUMMARY_KEYS
 from brake_hil.errors import BrakeHilError
-from brake_hil.files import check_output_file
+from brake_hil.results.backends import (
+    BUSY_TIMEOUT_S,
+    Database,
+    database_path,
+    enforce_foreign_keys,
+    open_database,
+    set_wal,
+)
 from brake_hil.results.identity import RecordingIdentity, identify_loosely
 
 __all__ = [
@@ -65,22 +72,18 @@ SCHEMA_VERSION: Final = 1
 """``meta.schema_version`` this module writes and reads."""
 KINDS: Final = ("diagnosis", "regression", "comparison")
 """The commands whose results are stored."""
-BUSY_TIMEOUT_S: Final = 60.0
-"""How long a writer waits for another process's transaction (s)."""
-_SQLITE_MAGIC: Final = b"SQLite format 3\x00"
-_URL_SCHEME: Final = re.compile(r"^([A-Za-z][A-Za-z0-9+.-]*)://")
 
 _SCHEMA: Final = """
 CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
 CREATE TABLE IF NOT EXISTS recordings (
     content_hash TEXT PRIMARY KEY,
     path TEXT NOT NULL,
-    start_ns INTEGER,
-    end_ns INTEGER,
-    duration_s REAL
+    start_ns {int64},
+    end_ns {int64},
+    duration_s {real}
 );
 CREATE TABLE IF NOT EXISTS runs (
-    id INTEGER PRIMARY KEY,
+    id {id},
     kind TEXT NOT NULL CHECK (kind IN ('diagnosis', 'regression', 'comparison')),
     recording_hash TEXT NOT NULL REFERENCES recordings (content_hash),
     rig_name TEXT NOT NULL,
@@ -91,35 +94,38 @@ CREATE TABLE IF NOT EXISTS runs (
     status TEXT NOT NULL CHECK (status IN ('ok', 'failed')),
     error TEXT,
     effects TEXT,
-    confidence REAL,
+    confidence {real},
     explanation TEXT,
     UNIQUE (kind, recording_hash, rig_hash, tool_version)
 );
 CREATE INDEX IF NOT EXISTS runs_by_rig ON runs (kind, rig_name);
 CREATE TABLE IF NOT EXISTS calibration (
-    run INTEGER NOT NULL REFERENCES runs (id) ON DELETE CASCADE,
+    {seq}
+    run {int64} NOT NULL REFERENCES runs (id) ON DELETE CASCADE,
     name TEXT NOT NULL,
-    multiplier REAL NOT NULL,
-    prior_sigma REAL NOT NULL,
-    posterior_sigma REAL NOT NULL,
-    improved_multiplier REAL,
+    multiplier {real} NOT NULL,
+    prior_sigma {real} NOT NULL,
+    posterior_sigma {real} NOT NULL,
+    improved_multiplier {real},
     PRIMARY KEY (run, name)
 );
 CREATE TABLE IF NOT EXISTS metrics (
-    run INTEGER NOT NULL REFERENCES runs (id) ON DELETE CASCADE,
+    {seq}
+    run {int64} NOT NULL REFERENCES runs (id) ON DELETE CASCADE,
     model TEXT NOT NULL,
     channel TEXT NOT NULL,
-    ptp_ratio_pct REAL NOT NULL,
-    tau_over_T_pct REAL NOT NULL,
-    nrmse REAL NOT NULL,
+    ptp_ratio_pct {real} NOT NULL,
+    tau_over_T_pct {real} NOT NULL,
+    nrmse {real} NOT NULL,
     PRIMARY KEY (run, model, channel)
 );
 CREATE TABLE IF NOT EXISTS effects (
-    run INTEGER NOT NULL REFERENCES runs (id) ON DELETE CASCADE,
+    {seq}
+    run {int64} NOT NULL REFERENCES runs (id) ON DELETE CASCADE,
     effect TEXT NOT NULL,
     named INTEGER NOT NULL CHECK (named IN (0, 1)),
-    held_out_improvement REAL NOT NULL,
-    score REAL NOT NULL,
+    held_out_improvement {real} NOT NULL,
+    score {real} NOT NULL,
     parameters TEXT NOT NULL,
     PRIMARY KEY (run, effect)
 );
@@ -191,154 +197,77 @@ class FailedRun:
 # --------------------------------------------------------------------------- the door
 
 
-def database_path(url_or_path: str | Path) -> Path:
-    """The file of a results database given as a path or as ``sqlite:///path``.
-
-    ``sqlite:///results.db`` is relative to the working directory, ``sqlite:////abs/r.db``
-    absolute (SQLAlchemy's spelling).
-
-    Raises:
-        BrakeHilError: a URL of another scheme, or ``sqlite://`` without a file.
-    """
-    if isinstance(url_or_path, Path):
-        return url_or_path
-    match = _URL_SCHEME.match(url_or_path)
-    if match is None:
-        return Path(url_or_path)
-    scheme = match.group(1).lower()
-    if scheme != "sqlite":
-        raise BrakeHilError(
-            f"{url_or_path}: only SQLite is built in (give a file path or sqlite:///path), "
-            f"not {scheme}"
-        )
-    rest = url_or_path[match.end() :]
-    if not rest.startswith("/") or rest == "/":
-        raise BrakeHilError(f"{url_or_path}: give the database file as sqlite:///path")
-    return Path(rest[1:])
-
-
 def open_store(url_or_path: str | Path, *, create: bool = True) -> ResultsStore:
     """Open (or, with ``create``, make) a results database.
 
     Args:
-        url_or_path: the file, or ``sqlite:///path``.
-        create: make the file (and its folder) when missing; without, a missing file is
-            refused.
+        url_or_path: the file, ``sqlite:///path``, or ``postgresql://USER@HOST:PORT/NAME``
+            (libpq's URL: ``?host=/socket/dir``, ``sslmode=``, ... as libpq takes them).
+        create: make the file (and its folder) when missing, and the tables in a database
+            without any; without, a missing file or an empty database is refused.
 
     Raises:
-        BrakeHilError: another URL scheme; a missing file without ``create``; a file that is
-            not an SQLite database, or one of another application or a newer schema.
+        BrakeHilError: an unknown URL scheme; a missing file without ``create``; a file that
+            is not an SQLite database; a server not reached, a login refused, a database that
+            does not exist; a database of another application or of a newer schema.
         OutputError: the file cannot be made.
     """
-    path = database_path(url_or_path)
+    database = open_database(url_or_path, create=create)
     try:
-        info = path.stat()
-    except FileNotFoundError:
-        if not create:
-            raise BrakeHilError(f"{path}: no such results database") from None
-        check_output_file(path)
-    except OSError as err:
-        raise BrakeHilError(f"{path}: cannot read the results database: {err.strerror}") from err
-    else:
-        if not stat.S_ISREG(info.st_mode):
-            raise BrakeHilError(f"{path}: not a regular file, so not a results database")
-        _check_magic(path, info.st_size)
-    try:
-        connection = sqlite3.connect(path, timeout=BUSY_TIMEOUT_S, isolation_level=None)
-    except sqlite3.Error as err:
-        raise BrakeHilError(f"{path}: cannot open the results database: {err}") from err
-    try:
-        _prepare(connection, path, create)
+        _prepare(database, create)
     except BaseException:
-        connection.close()
+        database.close()
         raise
-    return ResultsStore(connection, path)
+    return ResultsStore(database)
 
 
-def _check_magic(path: Path, size: int) -> None:
-    """Refuse a non-empty file that does not start as an SQLite database does."""
-    if size == 0:
-        return  # sqlite3 makes an empty file a database
+def _prepare(database: Database, create: bool) -> None:
+    """Check the database is a results database of this schema (make it so when new)."""
     try:
-        with path.open("rb") as stream:
-            head = stream.read(len(_SQLITE_MAGIC))
-    except OSError as err:
-        raise BrakeHilError(f"{path}: cannot read the results database: {err.strerror}") from err
-    if head != _SQLITE_MAGIC:
-        raise BrakeHilError(f"{path}: not an SQLite database, so not a results database")
-
-
-def _prepare(connection: sqlite3.Connection, path: Path, create: bool) -> None:
-    """Check the file is a results database of this schema (make it so when new)."""
-    try:
-        connection.execute(f"PRAGMA busy_timeout = {int(BUSY_TIMEOUT_S * 1000)}")
-        tables = {
-            name
-            for (name,) in connection.execute("SELECT name FROM sqlite_master WHERE type='table'")
-        }
+        tables = database.tables()
         if not tables:
             if not create:
-                raise BrakeHilError(f"{path}: an empty database, no results in it")
-            _set_wal(connection)
-            _create_schema(connection)
-            tables = set(_TABLES)
-        _check_ours(connection, path, tables)
-        connection.execute("PRAGMA foreign_keys = ON")
-    except sqlite3.DatabaseError as err:
-        raise BrakeHilError(f"{path}: not a usable results database: {err}") from err
+                raise BrakeHilError(f"{database.name}: an empty database, no results in it")
+            set_wal(database)
+            _create_schema(database)
+            tables = database.tables()
+        _check_ours(database, tables)
+        enforce_foreign_keys(database)
+    except database.errors as err:
+        raise BrakeHilError(
+            f"{database.name}: not a usable results database: {_one_line(str(err))}"
+        ) from err
 
 
-def _create_schema(connection: sqlite3.Connection) -> None:
+def _create_schema(database: Database) -> None:
     """The tables and ``meta``, in one transaction (another process may be making them too)."""
-    meta = (
-        "INSERT OR IGNORE INTO meta (key, value) VALUES "
-        f"('application', '{APPLICATION}'), ('schema_version', '{SCHEMA_VERSION}');"
-    )
-    try:
-        connection.executescript("BEGIN IMMEDIATE;" + _SCHEMA + meta + "COMMIT;")
-    except BaseException:
-        if connection.in_transaction:
-            connection.rollback()
-        raise
+    with database.transaction() as db:
+        db.lock(APPLICATION)
+        for statement in db.dialect.schema(_SCHEMA):
+            db.execute(statement)
+        db.execute(
+            "INSERT INTO meta (key, value) VALUES (?, ?), (?, ?) ON CONFLICT DO NOTHING",
+            ("application", APPLICATION, "schema_version", str(SCHEMA_VERSION)),
+        )
 
 
-def _set_wal(connection: sqlite3.Connection) -> None:
-    """WAL mode (readers and one writer at once); a file system without it keeps its journal."""
-    try:
-        connection.execute("PRAGMA journal_mode = WAL")
-    except sqlite3.OperationalError:
-        pass
-
-
-def _check_ours(connection: sqlite3.Connection, path: Path, tables: set[str]) -> None:
+def _check_ours(database: Database, tables: set[str]) -> None:
+    name = database.name
     if "meta" not in tables:
         shown = ", ".join(sorted(tables))
-        raise BrakeHilError(f"{path}: not a brake_hil results database (its tables: {shown})")
-    meta = dict(connection.execute("SELECT key, value FROM meta").fetchall())
+        raise BrakeHilError(f"{name}: not a brake_hil results database (its tables: {shown})")
+    meta = {str(key): value for key, value in database.execute("SELECT key, value FROM meta")}
     if meta.get("application") != APPLICATION:
-        raise BrakeHilError(f"{path}: not a brake_hil results database (a meta table of another)")
+        raise BrakeHilError(f"{name}: not a brake_hil results database (a meta table of another)")
     version = str(meta.get("schema_version", ""))
     if version != str(SCHEMA_VERSION):
         newer = version.isdigit() and int(version) > SCHEMA_VERSION
         raise BrakeHilError(
-            f"{path}: results schema {version or '?'}, this brake_hil reads {SCHEMA_VERSION}"
+            f"{name}: results schema {version or '?'}, this brake_hil reads {SCHEMA_VERSION}"
             + (" (written by a newer brake_hil)" if newer else "")
         )
     if missing := [t for t in _TABLES if t not in tables]:
-        raise BrakeHilError(f"{path}: results database without table {', '.join(missing)}")
-
-
-@contextmanager
-def _transaction(connection: sqlite3.Connection) -> Iterator[sqlite3.Connection]:
-    """One write transaction: taken at once (no upgrade from a read lock), all or nothing."""
-    if not connection.in_transaction:
-        connection.execute("BEGIN IMMEDIATE")
-    try:
-        yield connection
-    except BaseException:
-        connection.rollback()
-        raise
-    connection.commit()
+        raise BrakeHilError(f"{name}: results database without table {', '.join(missing)}")
 
 
 # --------------------------------------------------------------------------- checks
@@ -494,6 +423,11 @@ def _hypotheses(raw: object, named: set[str]) -> tuple[HypothesisRow, ...]:
     return tuple(rows.values())
 
 
+def _run_key(kind: str, recording_hash: str, rig_hash: str, version: str) -> str:
+    """A run's key as one text: what a writer locks on PostgreSQL."""
+    return "\x1f".join(("brake_hil run", kind, recording_hash, rig_hash, version))
+
+
 def _one_line(text: str) -> str:
     return " ".join(text.split()) or "(no message)"
 
@@ -505,13 +439,17 @@ class ResultsStore:
     """An open results database (:func:`open_store`); a context manager that closes it.
 
     Args:
-        connection: the SQLite connection (autocommit; each write takes its transaction).
-        path: its file.
+        database: the connection (each write takes its transaction).
+
+    Attributes:
+        name: the file, or the server's URL with the password masked.
+        path: the file (``None``: a PostgreSQL database).
     """
 
-    def __init__(self, connection: sqlite3.Connection, path: Path) -> None:
-        self._connection = connection
-        self.path = path
+    def __init__(self, database: Database) -> None:
+        self._connection = database
+        self.name = database.name
+        self.path = database.path
 
     def __enter__(self) -> ResultsStore:
         return self
@@ -525,7 +463,7 @@ class ResultsStore:
         self.close()
 
     def close(self) -> None:
-        """Close the database (a WAL file is folded back into it by the last one to close)."""
+        """Close the database (SQLite: the last to close folds the WAL file back into it)."""
         self._connection.close()
 
     # ------------------------------------------------------------------ writing
@@ -542,7 +480,7 @@ class ResultsStore:
             checked = check_diagnosis(document)
         except _KeyRefusedError as err:
             raise BrakeHilError(f"{recording.path}: diagnosis not stored: {err}") from err
-        with _transaction(self._connection) as db:
+        with self._connection.transaction() as db:
             run = self._new_run(db, "diagnosis", recording)
             db.execute(
                 "UPDATE runs SET effects = ?, confidence = ?, explanation = ? WHERE id = ?",
@@ -602,7 +540,7 @@ class ResultsStore:
             checked = {model: check_metrics(v, f"metrics.{model}") for model, v in models.items()}
         except _KeyRefusedError as err:
             raise BrakeHilError(f"{recording.path}: {kind} not stored: {err}") from err
-        with _transaction(self._connection) as db:
+        with self._connection.transaction() as db:
             run = self._new_run(db, kind, recording)
             self._insert_metrics(db, run, checked)
         return run
@@ -625,7 +563,8 @@ class ResultsStore:
             raise BrakeHilError(f"unknown kind of run {kind!r} (known: {', '.join(KINDS)})")
         recording = identify_loosely(recording_path, rig_path)
         key = (kind, recording.content_hash, recording.rig_hash, __version__)
-        with _transaction(self._connection) as db:
+        with self._connection.transaction() as db:
+            db.lock(_run_key(*key))
             good = db.execute(
                 "SELECT id FROM runs WHERE kind = ? AND recording_hash = ? AND rig_hash = ? "
                 "AND tool_version = ? AND status = 'ok'",
@@ -638,19 +577,25 @@ class ResultsStore:
 
     def _new_run(
         self,
-        db: sqlite3.Connection,
+        db: Database,
         kind: str,
         recording: RecordingIdentity,
         error: str | None = None,
     ) -> int:
-        """Upsert the recording, drop the run this one replaces, insert the run."""
+        """Upsert the recording, drop the run this one replaces, insert the run.
+
+        Two writers of the same run key take turns (SQLite: one writer at a time; PostgreSQL:
+        the key's advisory lock), so the second replaces the first's run, never doubles it.
+        """
+        key = (kind, recording.content_hash, recording.rig_hash, __version__)
+        db.lock(_run_key(*key))
         db.execute(
             "INSERT INTO recordings (content_hash, path, start_ns, end_ns, duration_s) "
             "VALUES (?, ?, ?, ?, ?) ON CONFLICT (content_hash) DO UPDATE SET "
             "path = excluded.path, "
-            "start_ns = coalesce(excluded.start_ns, start_ns), "
-            "end_ns = coalesce(excluded.end_ns, end_ns), "
-            "duration_s = coalesce(excluded.duration_s, duration_s)",
+            "start_ns = coalesce(excluded.start_ns, recordings.start_ns), "
+            "end_ns = coalesce(excluded.end_ns, recordings.end_ns), "
+            "duration_s = coalesce(excluded.duration_s, recordings.duration_s)",
             (
                 recording.content_hash,
                 recording.path,
@@ -659,13 +604,12 @@ class ResultsStore:
                 recording.duration_s,
             ),
         )
-        key = (kind, recording.content_hash, recording.rig_hash, __version__)
         db.execute(
             "DELETE FROM runs WHERE kind = ? AND recording_hash = ? AND rig_hash = ? "
             "AND tool_version = ?",
             key,
         )
-        cursor = db.execute(
+        return db.insert_returning_id(
             "INSERT INTO runs (kind, recording_hash, rig_name, rig_hash, rig_path, tool_version, "
             "written_at, status, error) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
             (
@@ -680,12 +624,10 @@ class ResultsStore:
                 error,
             ),
         )
-        assert cursor.lastrowid is not None  # an INSERT into a rowid table
-        return cursor.lastrowid
 
     @staticmethod
     def _insert_metrics(
-        db: sqlite3.Connection, run: int, metrics: Mapping[str, Mapping[str, Mapping[str, float]]]
+        db: Database, run: int, metrics: Mapping[str, Mapping[str, Mapping[str, float]]]
     ) -> None:
         db.executemany(
             "INSERT INTO metrics (run, model, channel, ptp_ratio_pct, tau_over_T_pct, nrmse) "
@@ -702,10 +644,9 @@ class ResultsStore:
     def rigs(self) -> list[str]:
         """The names of the rigs with at least one stored diagnosis, sorted."""
         rows = self._connection.execute(
-            "SELECT DISTINCT rig_name FROM runs WHERE kind = 'diagnosis' AND status = 'ok' "
-            "ORDER BY rig_name"
+            "SELECT DISTINCT rig_name FROM runs WHERE kind = 'diagnosis' AND status = 'ok'"
         )
-        return [name for (name,) in rows]
+        return sorted(name for (name,) in rows)  # code points, as SQLite sorts (any collation)
 
     def diagnoses(self, rig: str | None = None, *, latest_only: bool = True) -> list[DiagnosisRow]:
         """The stored diagnoses (status ``ok``) in time order: recording start, then path.
@@ -736,7 +677,7 @@ class ResultsStore:
             CalibrationValue(name, multiplier, prior, posterior, improved)
             for name, multiplier, prior, posterior, improved in db.execute(
                 "SELECT name, multiplier, prior_sigma, posterior_sigma, improved_multiplier "
-                "FROM calibration WHERE run = ? ORDER BY rowid",
+                "FROM calibration WHERE run = ? ORDER BY {row_order}",
                 (run,),
             )
         )
@@ -744,14 +685,14 @@ class ResultsStore:
             HypothesisRow(effect, bool(named), improvement, score, json.loads(parameters))
             for effect, named, improvement, score, parameters in db.execute(
                 "SELECT effect, named, held_out_improvement, score, parameters FROM effects "
-                "WHERE run = ? ORDER BY rowid",
+                "WHERE run = ? ORDER BY {row_order}",
                 (run,),
             )
         )
         metrics: dict[str, dict[str, dict[str, float]]] = {}
         for model, channel, *values in db.execute(
             "SELECT model, channel, ptp_ratio_pct, tau_over_T_pct, nrmse FROM metrics "
-            "WHERE run = ? ORDER BY rowid",
+            "WHERE run = ? ORDER BY {row_order}",
             (run,),
         ):
             metrics.setdefault(model, {})[channel] = dict(zip(SUMMARY_KEYS, values))
@@ -779,7 +720,7 @@ class ResultsStore:
         result: dict[str, dict[str, dict[str, float]]] = {}
         for model, channel, *values in self._connection.execute(
             "SELECT model, channel, ptp_ratio_pct, tau_over_T_pct, nrmse FROM metrics "
-            "WHERE run = ? ORDER BY rowid",
+            "WHERE run = ? ORDER BY {row_order}",
             (run_id,),
         ):
             result.setdefault(model, {})[channel] = dict(zip(SUMMARY_KEYS, values))

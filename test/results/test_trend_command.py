@@ -18,7 +18,7 @@ from brake_hil.results.store import open_store
 from test.results.fleets import DAY_NS, START_NS, Run, document, steady_fleet, wearing_fleet
 
 
-def _record(database: Path, rig: str, fleet: list[Run]) -> None:
+def _record(database: Path | str, rig: str, fleet: list[Run]) -> None:
     with open_store(database) as store:
         for number, run in enumerate(fleet):
             start = START_NS + number * DAY_NS
@@ -126,10 +126,10 @@ def test_trend_refuses_bad_input_with_one_line_and_exit_2(
 
 
 def test_trend_refuses_another_database_url(capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["trend", "--db", "postgresql://lab/results"]) == 2
+    assert main(["trend", "--db", "mysql://lab/results"]) == 2
     assert capsys.readouterr().err == (
-        "brake-hil trend: error: postgresql://lab/results: only SQLite is built in (give a file "
-        "path or sqlite:///path), not postgresql\n"
+        "brake-hil trend: error: mysql://lab/results: not a database brake_hil knows (give a "
+        "file path, sqlite:///path or postgresql://USER@HOST:PORT/NAME), not mysql\n"
     )
 
 
