@@ -1148,7 +1148,10 @@ def describe_residual(
                 )
             )
     ranked = tuple(sorted(fitted, key=lambda f: f.improvement, reverse=True))
-    excess = None if noise_cost is None else baseline_cost / max(noise_cost, 1e-300)
+    floor = noise_cost
+    if floor is not None and ranked:  # no form fitted on training predicts held-out noise
+        floor = min(floor, baseline_cost / max(ranked[0].improvement, 1.0))
+    excess = None if floor is None else baseline_cost / max(floor, 1e-300)
     stands_out = bool(ranked) and ranked[0].improvement >= STANDS_OUT_RATIO
     if excess is not None and excess < NOISE_EXCESS:
         stands_out = False

@@ -170,3 +170,37 @@ def test_pairs_that_can_never_be_named_charge_their_worst_case() -> None:
     assert decide(replayed) == verdict
     stand = dataclasses.replace(ruled, stand_ins={"thermal_drift": "x"})
     assert Summary.from_dict(json.loads(json.dumps(stand.as_dict()))) == stand
+
+
+def test_a_structured_misfit_under_the_size_threshold_is_unexplained_not_none() -> None:
+    # NRMSE 0.3 %, under UNEXPLAINED_NRMSE; no candidate helps.
+    flat = summary(single("orifice_flow", BASE / 1.1), single("hose_compliance", BASE))
+    assert decide(flat).effects == ()
+    structured = dataclasses.replace(flat, form_gain=40.0)  # a leak's drift: a generic form
+    verdict = decide(structured)
+    assert verdict.effects == ("unexplained",) and verdict.chosen is None
+    assert decide(dataclasses.replace(flat, form_gain=1.9)).effects == ()
+    # the nearer the form is to the threshold, the less sure either way
+    near = decide(dataclasses.replace(flat, form_gain=2.2))
+    assert near.effects == ("unexplained",) and near.confidence < verdict.confidence
+
+
+def test_the_noise_floor_is_at_most_what_a_fitted_model_left() -> None:
+    # A slow change inflates the cycle-to-cycle noise estimate (excess 5, under NOISE_EXCESS),
+    # but a generic form fitted on training predicts the held-out data 40 times better:
+    # the noise is at most a 40th of the baseline's error.
+    inflated = dataclasses.replace(
+        summary(single("orifice_flow", BASE / 1.1)), noise_cost=BASE / 5
+    )
+    assert inflated.excess_ratio == pytest.approx(5.0)
+    assert decide(inflated).effects == ()
+    leak = dataclasses.replace(inflated, form_gain=40.0)
+    assert leak.excess_ratio == pytest.approx(40.0)
+    assert decide(leak).effects == ("unexplained",)
+    # a candidate's held-out cost bounds it the same way, and a candidate that reaches it
+    # is named
+    found = dataclasses.replace(inflated, singles=(single("orifice_flow", BASE / 30),))
+    assert found.excess_ratio == pytest.approx(30.0)
+    assert decide(found).effects == ("orifice_flow",)
+    again = Summary.from_dict(json.loads(json.dumps(leak.as_dict())))
+    assert again == leak and decide(again) == decide(leak)
