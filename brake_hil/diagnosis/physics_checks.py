@@ -14,8 +14,9 @@ a label:
   reaches (the catalogue entry's ``channels``), not almost all on others.
 * **Segments** (:func:`segment_check`): fitted on each training segment alone, its own
   parameters agree within their uncertainty (and within ``SEGMENT_TOLERANCE``): a physical
-  constant is the same at every pressure level; a delay that grows with amplitude is not a
-  delay.
+  constant is the same at every pressure level; and as tightly as the candidate's physics
+  says (``Candidate.segments_disagree``: a delay that shrinks with amplitude is not a
+  delay).
 * **Wider priors** (:func:`prior_check`): with the calibration's priors ``PRIOR_WIDENING``
   times wider (the rig's values freer than its tolerances say), and ``FREED_WIDENING`` times
   wider for the values this recording cannot identify (the Fisher information of the
@@ -159,6 +160,7 @@ def segment_check(model: Model, hypothesis: Fit) -> CheckOutcome:
     specs = model.parameters()[:own]
     logarithmic = np.array([log for *_, log in specs], dtype=bool)
     per_segment: list[tuple[np.ndarray, np.ndarray]] = []
+    raw: list[np.ndarray] = []  # each segment's own values, in the parameters' units
     for window in model.dataset.train:
         alone = Model(model.calibration, model.candidates, replace(model.dataset, train=(window,)))
         try:
@@ -166,6 +168,7 @@ def segment_check(model: Model, hypothesis: Fit) -> CheckOutcome:
         except FitError:
             continue
         values = fitted.theta[:own]
+        raw.append(np.asarray(values, dtype=float))
         sigma = (
             np.full(own, np.inf)
             if fitted.uncertainty is None
@@ -192,6 +195,15 @@ def segment_check(model: Model, hypothesis: Fit) -> CheckOutcome:
                         f"{name} differs between the segments ({', '.join(shown)} {unit}, "
                         f"low to high pressure): a constant of this physics would not",
                     )
+    if len(raw) >= 2:
+        rows = np.vstack(raw)
+        column = 0
+        for member in model.candidates:
+            size = len(member.parameters)
+            finding = member.segments_disagree(rows[:, column : column + size])
+            if finding is not None:
+                return CheckOutcome("segments", False, finding)
+            column += size
     return CheckOutcome(
         "segments", True, f"its parameters agree over {len(per_segment)} segments"
     )

@@ -83,3 +83,20 @@ def test_an_unexplained_misfit_is_described_by_its_generic_form(case_set: Path) 
     assert "looks like" in verdict["explanation"]
     assert "residual" in document and "physics_checks" in document
     json.dumps(document)  # plain JSON
+
+
+def test_a_load_cells_hysteresis_is_not_named_a_sensor_delay(tmp_path: Path) -> None:
+    """Family b's load-cell hysteresis (out of the library) fits as a delay of a few tenths of
+    a millisecond, but one that shrinks as the amplitude grows: the segments check sets the
+    delay aside (a delay is a time) and the verdict does not name it (case 24 of
+    ``brake-hil cases --family b --seed 701``, named sensor_delay at 0.74 before the check)."""
+    from brake_hil.virtual_rig.cases import make_case, plan_cases
+
+    spec = plan_cases(25, 701, family="b")[24]
+    assert [e.name for e in spec.effects] == ["force_sensor_hysteresis"]
+    make_case(spec, tmp_path, pulsing_s=5.0)
+    folder = tmp_path / spec.case_id
+    result = diagnose(read_recording(folder / "recording"), load_rig(folder / "rig.yaml"))
+    assert "sensor_delay" not in result.effects, result.explanation
+    findings = [c.finding for c in result.checks.get("sensor_delay", []) if not c.passed]
+    assert any("a delay is the same at every amplitude" in f for f in findings), result.checks

@@ -78,3 +78,27 @@ def test_the_farthest_rig_value_is_counted_from_the_rig_file_in_tolerance_sigmas
     # a value moved down counts as far as one moved up
     down = Fit((), np.array([5.0, 1.0, 0.15]), names, ("-", "x", "x"), 1.0, 1.0, {})
     assert farthest_rig_value(calibration, down)[0] == "valve_resistance"  # type: ignore[arg-type]
+
+
+def test_a_delay_is_the_same_at_every_amplitude() -> None:
+    """Per-segment delays (s) of p_b, F_k, x_c: a skew that holds passes, one that shrinks
+    as the amplitude grows (a loop of fixed width read as a lag) is refused."""
+    from brake_hil.diagnosis.candidates import candidate
+    from brake_hil.diagnosis.candidates.sensor_delay import SEGMENT_SKEW_SHARE, SKEW_THRESHOLD
+
+    delay = candidate("sensor_delay")
+    steady = np.array([[0.1e-3, 0.0, 3.36e-3], [0.1e-3, 0.0, 3.40e-3], [0.1e-3, 0.0, 3.40e-3]])
+    assert delay.segments_disagree(steady) is None
+    # a common delay of every output moves with the segment; the skew is what must hold
+    common = steady + np.array([[0.0], [0.8e-3], [1.6e-3]])
+    assert delay.segments_disagree(common) is None
+    shrinking = np.array([[1.59e-3, 0.0, 0.0], [0.98e-3, 0.0, 0.0], [0.69e-3, 0.0, 0.0]])
+    finding = delay.segments_disagree(shrinking)
+    assert finding is not None and "p_b" in finding and "1.59, 0.98, 0.69 ms" in finding
+    # small skews are judged against SKEW_THRESHOLD, not against themselves
+    small = np.array([[-0.17e-3, 0.0, 0.0], [-0.08e-3, 0.0, 0.0], [-0.04e-3, 0.0, 0.0]])
+    assert float(np.ptp(small[:, 0])) <= SEGMENT_SKEW_SHARE * SKEW_THRESHOLD
+    assert delay.segments_disagree(small) is None
+    assert delay.segments_disagree(shrinking[:1]) is None  # one segment: nothing to compare
+    # other candidates leave it to the generic test
+    assert candidate("hose_compliance").segments_disagree(np.ones((3, 1))) is None

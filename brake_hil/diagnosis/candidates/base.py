@@ -143,6 +143,16 @@ class Candidate:
         """
         return True
 
+    def segments_disagree(self, per_segment: FloatArray) -> str | None:
+        """What no constant of this physics would do, in words; None when the segments agree.
+
+        ``per_segment`` holds its own parameters fitted on each training segment alone (one
+        row per segment, in time order). The segments check (``physics_checks``) first
+        applies its generic test (every parameter within its uncertainty and a share of its
+        search range); a candidate whose physics fixes a value more tightly says so here.
+        """
+        return None
+
     def start(self, context: Context) -> FloatArray:
         """Start values of the parameters (may use the rig's derived quantities)."""
         return np.array([p.start for p in self.parameters])
