@@ -95,10 +95,22 @@ def test_a_delay_is_the_same_at_every_amplitude() -> None:
     shrinking = np.array([[1.59e-3, 0.0, 0.0], [0.98e-3, 0.0, 0.0], [0.69e-3, 0.0, 0.0]])
     finding = delay.segments_disagree(shrinking)
     assert finding is not None and "p_b" in finding and "1.59, 0.98, 0.69 ms" in finding
-    # small skews are judged against SKEW_THRESHOLD, not against themselves
-    small = np.array([[-0.17e-3, 0.0, 0.0], [-0.08e-3, 0.0, 0.0], [-0.04e-3, 0.0, 0.0]])
-    assert float(np.ptp(small[:, 0])) <= SEGMENT_SKEW_SHARE * SKEW_THRESHOLD
+    # p_i acquired late: every output leads alike, each segment's skews small and noisy
+    late_input = np.array(
+        [[-1.41e-3, -1.13e-3, -1.13e-3], [-1.17e-3, -1.08e-3, -1.08e-3], [-1.08e-3] * 3]
+    )
+    assert float(np.max(np.abs(late_input - np.median(late_input, axis=1)[:, None]))) < (
+        SKEW_THRESHOLD
+    )
+    assert delay.segments_disagree(late_input) is None
+    # ... but a common lead that shrinks with amplitude is no late input
+    fading = np.array([[-1.6e-3] * 3, [-1.0e-3] * 3, [-0.6e-3] * 3])
+    finding = delay.segments_disagree(fading)
+    assert finding is not None and "common to every output" in finding
+    # neither skewed nor late: nothing this check can judge (the generic test still runs)
+    small = np.array([[-0.17e-3, 0.0, 0.0], [-0.08e-3, 0.0, 0.0], [0.1e-3, 0.0, 0.0]])
     assert delay.segments_disagree(small) is None
+    assert SEGMENT_SKEW_SHARE < 1
     assert delay.segments_disagree(shrinking[:1]) is None  # one segment: nothing to compare
     # other candidates leave it to the generic test
     assert candidate("hose_compliance").segments_disagree(np.ones((3, 1))) is None

@@ -17,12 +17,13 @@ from brake_hil.types import FloatArray
 SKEW_THRESHOLD = 0.5e-3
 """Delay difference (s) that counts as acquisition skew."""
 SEGMENT_SKEW_SHARE = 0.3
-"""A channel's skew may differ between the pressure segments by at most this share of its
-largest (or of ``SKEW_THRESHOLD``, if larger): a delay is a time, the same at every
-amplitude. (Measured 2026-11-26 on 194 virtual-rig recordings of both families: the named
-sensor delays that were right differed 0.01-0.27 of that, the five named on a load cell's
-hysteresis or a creeping hose 0.34-0.56, falling with amplitude as a loop of fixed width
-read as a lag does.)"""
+"""A skewed channel's skew (or, with none skewed, the delay common to every output) may
+differ between the pressure segments by at most this share of its largest: a delay is a
+time, the same at every amplitude. (Measured 2026-11-26 on 194 virtual-rig recordings of
+both families: the skews of the named sensor delays that were right differed 0.01-0.25 of
+that, the five delays named on a load cell's hysteresis or a creeping hose 0.34-0.71, falling
+with amplitude as a loop of fixed width read as a lag does. A first version also judged
+skews under ``SKEW_THRESHOLD``, and set aside a late ``p_i`` on a fresh seed.)"""
 CHANNELS = ("p_b", "F_k", "x_c")
 
 
@@ -56,27 +57,32 @@ class SensorDelay(Candidate):
         return spread > SKEW_THRESHOLD or float(np.max(delays)) < -SKEW_THRESHOLD
 
     def segments_disagree(self, per_segment: FloatArray) -> str | None:
-        """The skewed channel's delay over the others' (its skew) changes between segments.
+        """A skew, or a late ``p_i``, that changes between the segments (rows).
 
-        The skew is taken against each segment's median delay (a delay common to every
-        output is the model's phase, not acquisition); the channel checked is the one whose
-        skew is largest on average.
+        A channel is skewed when its delay over each segment's median delay (the other
+        outputs) exceeds ``SKEW_THRESHOLD`` on average: each skewed channel's skew must hold
+        within ``SEGMENT_SKEW_SHARE`` of its largest. With no channel skewed and the outputs
+        leading alike by over ``SKEW_THRESHOLD`` (``p_i`` acquired late), the common (median)
+        delay must hold so.
         """
         delays = np.asarray(per_segment, dtype=float)[:, :3]
         if delays.shape[0] < 2:
             return None
-        skews = delays - np.median(delays, axis=1, keepdims=True)
-        channel = int(np.argmax(np.mean(np.abs(skews), axis=0)))
-        skew = skews[:, channel]
-        scale = max(float(np.max(np.abs(skew))), SKEW_THRESHOLD)
-        if float(np.ptp(skew)) <= SEGMENT_SKEW_SHARE * scale:
-            return None
-        shown = ", ".join(f"{1e3 * value:.2f}" for value in skew)
-        return (
-            f"the skew of {CHANNELS[channel]} differs between the segments ({shown} ms, "
-            f"segment by segment): a delay is the same at every amplitude; a loop of fixed "
-            f"width read as a lag shrinks as the amplitude grows"
-        )
+        common = np.median(delays, axis=1)
+        skews = delays - common[:, None]
+        skewed = [c for c in range(3) if float(np.mean(np.abs(skews[:, c]))) > SKEW_THRESHOLD]
+        series = [(f"the skew of {CHANNELS[c]}", skews[:, c]) for c in skewed]
+        if not series and float(np.mean(np.abs(common))) > SKEW_THRESHOLD:
+            series = [("the delay common to every output (p_i acquired late)", common)]
+        for what, values in series:
+            if float(np.ptp(values)) > SEGMENT_SKEW_SHARE * float(np.max(np.abs(values))):
+                shown = ", ".join(f"{1e3 * value:.2f}" for value in values)
+                return (
+                    f"{what} differs between the segments ({shown} ms, segment by segment): "
+                    f"a delay is the same at every amplitude; a loop of fixed width read as a "
+                    f"lag shrinks as the amplitude grows"
+                )
+        return None
 
     def consistent(self, evidence: dict[str, float]) -> bool:
         """A channel lags by more than a millisecond."""
