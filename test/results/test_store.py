@@ -25,6 +25,7 @@ from brake_hil.results.store import (
     database_path,
     open_store,
 )
+from test.conftest import PROJECT
 from test.results.fleets import real_document
 
 EMPTY = {"recordings": 0, "runs": 0, "calibration": 0, "metrics": 0, "effects": 0}
@@ -43,9 +44,18 @@ def identity(number: int = 0, rig: str = "rig A") -> RecordingIdentity:
     )
 
 
+@pytest.fixture(params=["sqlite", "postgresql"])
+def database(request: pytest.FixtureRequest, tmp_path: Path) -> str:
+    """A new database on each backend: an SQLite file, a PostgreSQL database (conftest.py)."""
+    if request.param == "sqlite":
+        return str(tmp_path / "results.sqlite")
+    return str(request.getfixturevalue("postgres_url"))
+
+
 @pytest.fixture
-def store(tmp_path: Path) -> Iterator[ResultsStore]:
-    with open_store(tmp_path / "results.sqlite") as opened:
+def store(database: str) -> Iterator[ResultsStore]:
+    """An empty store on each backend."""
+    with open_store(database) as opened:
         yield opened
 
 
@@ -100,6 +110,11 @@ def test_running_again_replaces_the_run_rather_than_adding_one(store: ResultsSto
     store.record_diagnosis(identity(), document)
     assert store.counts() == before
     assert [row.confidence for row in store.diagnoses()] == [0.5]
+    good = store.diagnoses()[0].run_id
+    bag = PROJECT / "bags" / "one_washer_open"
+    assert store.record_failure("diagnosis", bag, None, "first") != good
+    store.record_failure("diagnosis", bag, None, "again")
+    assert [f.error for f in store.failures()] == ["again"]
 
 
 def test_another_tool_version_adds_a_run_and_the_trend_sees_the_latest(
@@ -258,24 +273,33 @@ def test_a_missing_database_is_made_only_when_asked(tmp_path: Path) -> None:
         assert store.counts() == EMPTY
 
 
-def _append(path: str, first: int, count: int) -> None:
-    with open_store(path) as store:
-        for number in range(first, first + count):
+def _append(url: str, numbers: list[int], start: object) -> None:
+    start.wait()  # type: ignore[attr-defined]
+    with open_store(url) as store:
+        for number in numbers:
             store.record_diagnosis(identity(number), real_document())
 
 
-def test_two_processes_appending_at_once_lose_nothing(tmp_path: Path) -> None:
-    path = tmp_path / "results.sqlite"
+def test_two_processes_appending_at_once_lose_nothing_and_double_nothing(
+    database: str,
+) -> None:
     context = multiprocessing.get_context("fork")
-    workers = [context.Process(target=_append, args=(str(path), i * 100, 25)) for i in range(2)]
+    start = context.Barrier(2)
+    shared = list(range(500, 510))  # both write these: the same run keys, racing
+    plans = [list(range(i * 100, i * 100 + 20)) + shared for i in range(2)]
+    workers = [context.Process(target=_append, args=(database, p, start)) for p in plans]
     for worker in workers:
         worker.start()
     for worker in workers:
-        worker.join(timeout=60)
+        worker.join(timeout=120)
     assert [worker.exitcode for worker in workers] == [0, 0]
-    with open_store(path, create=False) as store:
-        assert store.counts()["runs"] == 50
-        assert store.counts()["effects"] == 50 * 9
+    with open_store(database, create=False) as store:
+        counts = store.counts()
+        paths = sorted(row.recording_path for row in store.diagnoses(latest_only=False))
+    assert counts["runs"] == counts["recordings"] == 50
+    assert counts["effects"] == 50 * 9
+    expected = sorted({f"bags/run_{n:03d}" for plan in plans for n in plan})
+    assert paths == expected
 
 
 # --------------------------------------------------------------------------- fuzz
@@ -345,7 +369,6 @@ def test_a_spoiled_document_is_stored_whole_or_refused_with_nothing_written(
 
 def test_a_later_failed_attempt_never_replaces_a_good_result(store: ResultsStore) -> None:
     from brake_hil.results.identity import identify
-    from test.conftest import PROJECT
 
     bag = PROJECT / "bags" / "one_washer_open"
     rig = PROJECT / "bags" / "one_washer_open.rig.yaml"

@@ -8,8 +8,6 @@ through psycopg directly (an independent reader).
 from __future__ import annotations
 
 import dataclasses
-import math
-import multiprocessing
 from pathlib import Path
 import re
 import socket
@@ -26,10 +24,8 @@ from brake_hil.results.store import (
     APPLICATION,
     SCHEMA_VERSION,
     DiagnosisRow,
-    ResultsStore,
     open_store,
 )
-from test.conftest import PROJECT
 from test.results.conftest import PostgresServer
 from test.results.fleets import real_document, steady_fleet, wearing_fleet
 from test.results.test_store import EMPTY, identity
@@ -84,76 +80,6 @@ def test_each_kind_of_row_reads_back_as_from_sqlite(postgres_url: str, tmp_path:
             "SELECT held_out_improvement FROM effects WHERE effect = 'seal_stick_slip' LIMIT 1"
         ).fetchone()
         assert improvement == (105.012,)
-
-
-def test_running_again_replaces_the_run_rather_than_adding_one(postgres_url: str) -> None:
-    with open_store(postgres_url) as store:
-        document = real_document()
-        store.record_diagnosis(identity(), document)
-        before = store.counts()
-        document["verdict"]["confidence"] = 0.5
-        store.record_diagnosis(identity(), document)
-        assert store.counts() == before
-        assert [row.confidence for row in store.diagnoses()] == [0.5]
-        good = store.diagnoses()[0].run_id
-        bag = PROJECT / "bags" / "one_washer_open"
-        assert store.record_failure("diagnosis", bag, None, "first") != good
-        store.record_failure("diagnosis", bag, None, "again")
-        assert [f.error for f in store.failures()] == ["again"]
-
-
-def test_a_refused_document_or_an_error_mid_write_leaves_nothing(
-    postgres_url: str, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    with open_store(postgres_url) as store:
-        spoiled = real_document()
-        spoiled["improved"]["metrics"]["F_k"]["nrmse"] = math.nan
-        with pytest.raises(BrakeHilError, match=r"improved\.metrics\.F_k\.nrmse: not a finite"):
-            store.record_diagnosis(identity(), spoiled)
-        assert store.counts() == EMPTY
-        store.record_diagnosis(identity(), real_document())
-        before = store.counts()
-
-        def fail(*args: object) -> None:
-            raise RuntimeError("disk on fire")
-
-        monkeypatch.setattr(ResultsStore, "_insert_metrics", staticmethod(fail))
-        changed = real_document()
-        changed["verdict"]["confidence"] = 0.1
-        for number in (0, 1):  # the run it would replace, and a new one
-            with pytest.raises(RuntimeError, match="disk on fire"):
-                store.record_diagnosis(identity(number), changed)
-        assert store.counts() == before
-        assert [row.confidence for row in store.diagnoses()] == [0.867]
-
-
-def _append(url: str, numbers: list[int], start: object) -> None:
-    start.wait()  # type: ignore[attr-defined]
-    with open_store(url) as store:
-        for number in numbers:
-            store.record_diagnosis(identity(number), real_document())
-
-
-def test_two_processes_appending_at_once_lose_nothing_and_double_nothing(
-    postgres_url: str,
-) -> None:
-    context = multiprocessing.get_context("fork")
-    start = context.Barrier(2)
-    shared = list(range(500, 510))  # both write these: the same run keys, racing
-    plans = [list(range(i * 100, i * 100 + 20)) + shared for i in range(2)]
-    workers = [context.Process(target=_append, args=(postgres_url, p, start)) for p in plans]
-    for worker in workers:
-        worker.start()
-    for worker in workers:
-        worker.join(timeout=120)
-    assert [worker.exitcode for worker in workers] == [0, 0]
-    with open_store(postgres_url, create=False) as store:
-        counts = store.counts()
-        paths = sorted(row.recording_path for row in store.diagnoses(latest_only=False))
-    assert counts["runs"] == counts["recordings"] == 50
-    assert counts["effects"] == 50 * 9
-    expected = sorted({f"bags/run_{n:03d}" for plan in plans for n in plan})
-    assert paths == expected
 
 
 @pytest.mark.parametrize(
