@@ -103,11 +103,11 @@ def test_a_delay_is_the_same_at_every_amplitude() -> None:
         SKEW_THRESHOLD
     )
     assert delay.segments_disagree(late_input) is None
-    # ... but a common lead that shrinks with amplitude is no late input
-    fading = np.array([[-1.6e-3] * 3, [-1.0e-3] * 3, [-0.6e-3] * 3])
-    finding = delay.segments_disagree(fading)
-    assert finding is not None and "common to every output" in finding
-    # neither skewed nor late: nothing this check can judge (the generic test still runs)
+    # the common lead is not judged: per segment it trades with the calibration's phase
+    # (a true late p_i of family b came out 0.11, 0.84, 0.95 ms)
+    drifting_lead = np.array([[-0.11e-3] * 3, [-0.84e-3] * 3, [-0.95e-3] * 3])
+    assert delay.segments_disagree(drifting_lead) is None
+    # no channel skewed: nothing this check can judge (the generic test still runs)
     small = np.array([[-0.17e-3, 0.0, 0.0], [-0.08e-3, 0.0, 0.0], [0.1e-3, 0.0, 0.0]])
     assert delay.segments_disagree(small) is None
     assert SEGMENT_SKEW_SHARE < 1

@@ -17,13 +17,13 @@ from brake_hil.types import FloatArray
 SKEW_THRESHOLD = 0.5e-3
 """Delay difference (s) that counts as acquisition skew."""
 SEGMENT_SKEW_SHARE = 0.3
-"""A skewed channel's skew (or, with none skewed, the delay common to every output) may
-differ between the pressure segments by at most this share of its largest: a delay is a
-time, the same at every amplitude. (Measured 2026-11-26 on 194 virtual-rig recordings of
-both families: the skews of the named sensor delays that were right differed 0.01-0.25 of
-that, the five delays named on a load cell's hysteresis or a creeping hose 0.34-0.71, falling
-with amplitude as a loop of fixed width read as a lag does. A first version also judged
-skews under ``SKEW_THRESHOLD``, and set aside a late ``p_i`` on a fresh seed.)"""
+"""A skewed channel's skew may differ between the pressure segments by at most this share of
+its largest: a delay is a time, the same at every amplitude. (Measured 2026-11-26 on 194
+virtual-rig recordings of both families: the skews of the named sensor delays that were
+right differed 0.01-0.25 of that, the five delays named on a load cell's hysteresis or a
+creeping hose 0.34-0.71, falling with amplitude as a loop of fixed width read as a lag does.
+Two first versions also judged skews under ``SKEW_THRESHOLD``, then the common delay of a
+late ``p_i``; each set aside a true late ``p_i`` on a fresh seed.)"""
 CHANNELS = ("p_b", "F_k", "x_c")
 
 
@@ -57,13 +57,13 @@ class SensorDelay(Candidate):
         return spread > SKEW_THRESHOLD or float(np.max(delays)) < -SKEW_THRESHOLD
 
     def segments_disagree(self, per_segment: FloatArray) -> str | None:
-        """A skew, or a late ``p_i``, that changes between the segments (rows).
+        """A skew that changes between the segments (rows).
 
         A channel is skewed when its delay over each segment's median delay (the other
         outputs) exceeds ``SKEW_THRESHOLD`` on average: each skewed channel's skew must hold
-        within ``SEGMENT_SKEW_SHARE`` of its largest. With no channel skewed and the outputs
-        leading alike by over ``SKEW_THRESHOLD`` (``p_i`` acquired late), the common (median)
-        delay must hold so.
+        within ``SEGMENT_SKEW_SHARE`` of its largest. The delay common to every output (a
+        late ``p_i``) is not judged: fitted per segment it trades with the calibration's own
+        phase (a true late ``p_i`` of family b came out 0.11, 0.84, 0.95 ms).
         """
         delays = np.asarray(per_segment, dtype=float)[:, :3]
         if delays.shape[0] < 2:
@@ -71,10 +71,7 @@ class SensorDelay(Candidate):
         common = np.median(delays, axis=1)
         skews = delays - common[:, None]
         skewed = [c for c in range(3) if float(np.mean(np.abs(skews[:, c]))) > SKEW_THRESHOLD]
-        series = [(f"the skew of {CHANNELS[c]}", skews[:, c]) for c in skewed]
-        if not series and float(np.mean(np.abs(common))) > SKEW_THRESHOLD:
-            series = [("the delay common to every output (p_i acquired late)", common)]
-        for what, values in series:
+        for what, values in ((f"the skew of {CHANNELS[c]}", skews[:, c]) for c in skewed):
             if float(np.ptp(values)) > SEGMENT_SKEW_SHARE * float(np.max(np.abs(values))):
                 shown = ", ".join(f"{1e3 * value:.2f}" for value in values)
                 return (
