@@ -248,16 +248,18 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
     form_gain = residual.forms[0].improvement if residual.forms else 1.0
     ruled_out = unnameable_pairs(baseline, singles)
     pairs = _fit_pairs(calibration, dataset, baseline, singles, unfitted, say, ruled_out)
-    summary = summarise(baseline, singles, pairs, dataset.noise_cost(), evidence, ruled_out)
-    summary = replace(summary, form_gain=form_gain)
+    summary = summarise(
+        baseline, singles, pairs, dataset.noise_cost(), evidence, ruled_out, form_gain
+    )
     verdict = decide(summary)
     chosen_set = set(verdict.chosen or ())
     if chosen_set and any(not chosen_set & set(p) for p in ruled_out):
         # An unfitted pair would be a rival of this verdict: fit them after all.
         say("fitting the pairs left out, as rivals of the verdict")
         pairs = _fit_pairs(calibration, dataset, baseline, singles, unfitted, say)
-        summary = summarise(baseline, singles, pairs, dataset.noise_cost(), evidence)
-        summary = replace(summary, form_gain=form_gain)
+        summary = summarise(
+            baseline, singles, pairs, dataset.noise_cost(), evidence, form_gain=form_gain
+        )
         verdict = decide(summary)
     hypotheses = singles + pairs
     checks: dict[str, list[CheckOutcome]] = {}
@@ -496,8 +498,13 @@ def summarise(
     noise_cost: float,
     evidence: Evidence,
     pairs_ruled_out: frozenset[tuple[str, ...]] = frozenset(),
+    form_gain: float = 1.0,
 ) -> Summary:
-    """The decision's inputs from the fits (and the pairs left unfitted as unnameable)."""
+    """The decision's inputs from the fits.
+
+    Also the pairs left unfitted as unnameable, and the best generic form's held-out
+    improvement (:mod:`.residual_forms`).
+    """
 
     def hypothesis(h: Fit) -> Hypothesis:
         return Hypothesis(
@@ -519,6 +526,7 @@ def summarise(
         pairs=tuple(hypothesis(h) for h in pairs),
         baseline_channel_nrmse=dict(baseline.held_out_nrmse),
         pairs_ruled_out=tuple(sorted(pairs_ruled_out)),
+        form_gain=form_gain,
     )
 
 

@@ -68,19 +68,19 @@ class SensorDelay(Candidate):
         delays = np.asarray(per_segment, dtype=float)[:, :3]
         if delays.shape[0] < 2:
             return None
-        common = np.median(delays, axis=1)
-        skews = delays - common[:, None]
-        skewed = [c for c in range(3) if float(np.mean(np.abs(skews[:, c]))) > SKEW_THRESHOLD]
-        for what, values in ((f"the skew of {CHANNELS[c]}", skews[:, c]) for c in skewed):
-            if float(np.ptp(values)) > SEGMENT_SKEW_SHARE * float(np.max(np.abs(values))):
-                shown = ", ".join(f"{1e3 * value:.2f}" for value in values)
+        skews = delays - np.median(delays, axis=1, keepdims=True)
+        for channel, skew in zip(CHANNELS, skews.T):
+            if float(np.mean(np.abs(skew))) <= SKEW_THRESHOLD:
+                continue  # not skewed
+            if float(np.ptp(skew)) > SEGMENT_SKEW_SHARE * float(np.max(np.abs(skew))):
+                shown = ", ".join(f"{1e3 * value:.2f}" for value in skew)
                 return (
-                    f"{what} differs between the segments ({shown} ms, segment by segment): "
-                    f"a delay is the same at every amplitude; a loop of fixed width read as a "
-                    f"lag shrinks as the amplitude grows"
+                    f"the skew of {channel} differs between the segments ({shown} ms, segment "
+                    f"by segment): a delay is the same at every amplitude; a loop of fixed "
+                    f"width read as a lag shrinks as the amplitude grows"
                 )
         return None
 
     def consistent(self, evidence: dict[str, float]) -> bool:
         """A channel lags by more than a millisecond."""
-        return max(abs(evidence.get(f"lag_{c}_ms", 0.0)) for c in ("p_b", "F_k", "x_c")) > 1.0
+        return max(abs(evidence.get(f"lag_{c}_ms", 0.0)) for c in CHANNELS) > 1.0
