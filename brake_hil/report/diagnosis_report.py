@@ -514,10 +514,11 @@ def _checks_table(diagnosis: Diagnosis) -> str:
         for outcome in outcomes
     )
     return (
-        "<p>Before a hypothesis is named it must behave as its physics: no generic form "
-        "explains the misfit far better, the error it removes is on channels its physics "
-        "reaches, its parameters agree segment by segment, and it survives wider priors on "
-        "the rig's values.</p><table><tr><th>hypothesis</th><th>check</th><th>result</th>"
+        "<p>Before a hypothesis is named it must explain the misfit clearly better than a "
+        "generic form of it does (the decision's rule), and behave as its physics: the error "
+        "it removes is on channels its physics reaches, its parameters agree segment by "
+        "segment, and it survives wider priors on the rig's values.</p>"
+        "<table><tr><th>hypothesis</th><th>check</th><th>result</th>"
         "<th>what was found</th></tr>" + rows + "</table>"
     )
 

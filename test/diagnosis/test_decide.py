@@ -230,3 +230,8 @@ def test_an_effect_no_better_than_a_generic_form_is_not_identified() -> None:
     both = dataclasses.replace(stand_in, singles=singles)
     assert decide(dataclasses.replace(both, form_gain=2.0)).effects == ("eccentric_load",)
     assert decide(dataclasses.replace(both, form_gain=2.2)).effects == ("unexplained",)
+    # an exact fit leaves only noise: a form that also fits exactly cannot tell them apart
+    # (a constant sensor offset, which every form's own offset absorbs too)
+    offset = dataclasses.replace(summary(single("eccentric_load", base / 300)), form_gain=310.0)
+    assert offset.singles[0].held_out_cost <= diagnosis.NOISE_EXCESS * offset.noise_cost
+    assert decide(offset).effects == ("eccentric_load",)

@@ -15,7 +15,7 @@ import shutil
 import pytest
 
 from brake_hil.app.benchmark import read_labels, run_cases, score
-from brake_hil.diagnosis.diagnose import diagnose
+from brake_hil.diagnosis.diagnose import Diagnosis, diagnose
 from brake_hil.io.recording_reader import read_recording
 from brake_hil.io.recording_writer import save_recording
 from brake_hil.physics.rig import Rig, load_rig
@@ -87,8 +87,9 @@ def test_an_unexplained_misfit_is_described_by_its_generic_form(case_set: Path) 
 
 def test_a_load_cells_hysteresis_is_not_named_a_sensor_delay(tmp_path: Path) -> None:
     """Family b's load-cell hysteresis (out of the library) fits as a delay of a few tenths of
-    a millisecond, but one that shrinks as the amplitude grows: the segments check sets the
-    delay aside (a delay is a time) and the verdict does not name it (case 24 of
+    a millisecond, but one that shrinks as the amplitude grows, and what it leaves rings: a
+    physics check sets the delay aside (a delay is a time) and the verdict does not name it
+    (case 24 of
     ``brake-hil cases --family b --seed 701``, named sensor_delay at 0.74 before the check)."""
     from brake_hil.virtual_rig.cases import make_case, plan_cases
 
@@ -99,4 +100,34 @@ def test_a_load_cells_hysteresis_is_not_named_a_sensor_delay(tmp_path: Path) -> 
     result = diagnose(read_recording(folder / "recording"), load_rig(folder / "rig.yaml"))
     assert "sensor_delay" not in result.effects, result.explanation
     findings = [c.finding for c in result.checks.get("sensor_delay", []) if not c.passed]
-    assert any("a delay is the same at every amplitude" in f for f in findings), result.checks
+    # set aside by the leftover check (what the delay leaves on F_k rings), or, were that
+    # passed, by the segments check (the skew shrinks as the amplitude grows)
+    assert any(
+        "a delay is the same at every amplitude" in f or "its physics leaves no room" in f
+        for f in findings
+    ), result.checks
+
+
+def test_a_resonant_pressure_tap_is_not_named_a_sensor_delay(tmp_path: Path) -> None:
+    """Family b's pressure tap (out of the library: p_b read through a 17 Hz mode) lags p_b
+    at the pulsing's frequency, so a delay of p_b cuts the error; but what the delay leaves
+    on p_b rings, and the leftover check sets it aside (case 51 of ``brake-hil cases
+    --family b --seed 702``, named sensor_delay at 0.66 before the check). A true delay of
+    x_c (case 1 of seed 703) leaves no ring and is still named."""
+    from brake_hil.virtual_rig.cases import make_case, plan_cases
+
+    def diagnosed(seed: int, number: int, effect: str) -> Diagnosis:
+        spec = plan_cases(number + 1, seed, family="b")[number]
+        assert [e.name for e in spec.effects] == [effect]
+        make_case(spec, tmp_path, pulsing_s=5.0)
+        folder = tmp_path / spec.case_id
+        return diagnose(read_recording(folder / "recording"), load_rig(folder / "rig.yaml"))
+
+    tap = diagnosed(702, 51, "pressure_tap_resonance")
+    assert "sensor_delay" not in tap.effects, tap.explanation
+    findings = [c.finding for c in tap.checks.get("sensor_delay", []) if not c.passed]
+    assert any("what it leaves on p_b is a resonance" in f for f in findings), tap.checks
+    delay = diagnosed(703, 1, "sensor_delay")
+    assert delay.effects == ("sensor_delay",), delay.explanation
+    leftover = [c for c in delay.checks["sensor_delay"] if c.name == "leftover"]
+    assert leftover and leftover[0].passed and "x_c" in leftover[0].finding

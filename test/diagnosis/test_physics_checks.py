@@ -35,26 +35,6 @@ def test_an_improvement_spread_over_channels_passes() -> None:
     assert channel_check(BASELINE, pair).passed
 
 
-def test_a_generic_form_that_explains_far_more_marks_a_stand_in() -> None:
-    """A pair mimicking a load cell's curved gain: a static map of F_k explains it better."""
-    from types import SimpleNamespace
-
-    from brake_hil.diagnosis.physics_checks import FORM_RATIO, form_check
-
-    hypothesis = _fit(
-        ("seal_stick_slip", "eccentric_load"), {"p_b": 0.02, "F_k": 0.005, "x_c": 0.02}
-    )
-    gain = BASELINE.held_out_cost / hypothesis.held_out_cost
-    form = SimpleNamespace(description="a static nonlinear map of F_k", improvement=0.0)
-    residual = SimpleNamespace(forms=[form])
-    form.improvement = 0.9 * FORM_RATIO * gain
-    assert form_check(BASELINE, hypothesis, residual).passed  # type: ignore[arg-type]
-    form.improvement = 1.1 * FORM_RATIO * gain
-    outcome = form_check(BASELINE, hypothesis, residual)  # type: ignore[arg-type]
-    assert not outcome.passed and "static nonlinear map of F_k" in outcome.finding
-    assert form_check(BASELINE, hypothesis, None).passed
-
-
 def test_the_farthest_rig_value_is_counted_from_the_rig_file_in_tolerance_sigmas() -> None:
     """A freed baseline's factors multiply the calibrated values; sigmas are the prior's."""
     from types import SimpleNamespace

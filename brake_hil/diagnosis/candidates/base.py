@@ -153,6 +153,15 @@ class Candidate:
         """
         return None
 
+    def leaves_no(self, theta: FloatArray) -> dict[str, str]:
+        """Generic forms (by name, :mod:`..residual_forms`) its physics leaves no room for.
+
+        Channel -> form: fitted with ``theta`` (its own parameters), what the hypothesis leaves
+        on that channel must not be that form (the leftover check of ``physics_checks``).
+        Default: nothing to check.
+        """
+        return {}
+
     def start(self, context: Context) -> FloatArray:
         """Start values of the parameters (may use the rig's derived quantities)."""
         return np.array([p.start for p in self.parameters])

@@ -38,8 +38,7 @@ class SensorDelay(Candidate):
 
     entry = CATALOGUE["sensor_delay"]
     parameters = tuple(
-        CandidateParameter(f"delay_{channel}", "s", -0.02, 0.02, 0.0)
-        for channel in CHANNELS
+        CandidateParameter(f"delay_{channel}", "s", -0.02, 0.02, 0.0) for channel in CHANNELS
     )
 
     def fill(self, draft: Draft, theta: FloatArray, context: Context) -> None:
@@ -80,6 +79,17 @@ class SensorDelay(Candidate):
                     f"width read as a lag shrinks as the amplitude grows"
                 )
         return None
+
+    def leaves_no(self, theta: FloatArray) -> dict[str, str]:
+        """A skewed channel must not ring: a delay shifts it in time, with unit gain.
+
+        A transducer read through a resonant tapping line lags at the pulsing's frequency
+        too, but its reading rings after each edge; what the delay leaves on that channel is
+        then a mode (``resonance``).
+        """
+        delays = np.asarray(theta[:3], dtype=float)
+        skews = delays - np.median(delays)
+        return {c: "resonance" for c, skew in zip(CHANNELS, skews) if abs(skew) > SKEW_THRESHOLD}
 
     def consistent(self, evidence: dict[str, float]) -> bool:
         """A channel lags by more than a millisecond."""
