@@ -486,13 +486,8 @@ def run_chain(
         "statistics_file": str(out_dir / "pressure_source.json"),
         "rate": float(rate),
         "exit_at_end": True,
-        # Each topic's own consumers: the model takes p_i, the comparator the measured
-        # outputs and the predictions, the recorder everything (p_a only it).
         "wait_for_subscribers": 0,
-        "wait_for_topics": [
-            f"{spec.name}:{subscribers}"
-            for spec in (MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS, *PREDICTED_OUTPUTS)
-        ]
+        "wait_for_topics": _source_waits(subscribers)
         + ([f"{AIR_PRESSURE.name}:1"] if has_recorder and source.air_pressure is not None else []),
         "wait_timeout": 30.0,
         "start_delay": 1.0,
@@ -538,6 +533,18 @@ def run_chain(
         say,
         expected=int(source.time.size),
     )
+
+
+def _source_waits(subscribers: int) -> list[str]:
+    """The pressure source's ``wait_for_topics``: each topic's own consumers.
+
+    The model takes p_i, the comparator the measured outputs and the predictions, the recorder
+    everything: ``subscribers`` on each (2 with a recorder, 1 without).
+    """
+    return [
+        f"{spec.name}:{subscribers}"
+        for spec in (MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS, *PREDICTED_OUTPUTS)
+    ]
 
 
 def _wait_for_file(path: Path, node: NodeProcess, timeout_s: float, poll_s: float = 0.1) -> bool:
@@ -742,6 +749,12 @@ def run_can_chain(
                     "can_channel": str(link),
                     "can_bitrate": 1_000_000,
                     "statistics_file": str(out_dir / "pressure_source.json"),
+                    # the emulator starts once this source opens the port: open it only once
+                    # the model and the recorder take p_i (discovery can take over a second
+                    # on a busy machine: 1047 of 3000 samples went unpredicted once)
+                    "wait_for_subscribers": 0,
+                    "wait_for_topics": _source_waits(2),
+                    "wait_timeout": 30.0,
                 },
                 env,
                 logs,

@@ -339,6 +339,8 @@ class PressureSourceNode(Node):
     # -- CAN ---------------------------------------------------------------------------
 
     def _prepare_can(self, publish_measured: bool) -> None:
+        import can
+
         from brake_hil.io.can_daq import CanDaq
 
         settings = self.settings
@@ -351,7 +353,14 @@ class PressureSourceNode(Node):
             stale_after_s=settings.stale_after_ms / 1e3,
             bus_kwargs=options if settings.can_interface == "slcan" else None,
         )
-        self._daq.open()  # an unknown interface fails here; a missing adapter is retried
+        if self._waits():  # opened after the wait (_acquire); an unknown interface fails now
+            if settings.can_interface not in can.interfaces.VALID_INTERFACES:
+                raise BrakeHilError(
+                    f"CAN interface {settings.can_interface!r} is unknown (python-can has "
+                    f"{', '.join(sorted(can.interfaces.VALID_INTERFACES))})"
+                )
+        else:
+            self._daq.open()  # an unknown interface fails here; a missing adapter is retried
         quantities = self._daq.codec.quantities
         unknown = [q for q in quantities if q not in QUANTITY_TOPICS]
         if unknown:
@@ -363,10 +372,18 @@ class PressureSourceNode(Node):
             f"{settings.can_channel} at {settings.can_bitrate} bit/s"
         )
 
+    def _waits(self) -> bool:
+        """A wait for subscribers was asked for (``wait_for_subscribers``, ``wait_for_topics``)."""
+        return self.settings.wait_for_subscribers > 0 or any(
+            entry.strip() for entry in self.settings.wait_for_topics
+        )
+
     def _acquire(self) -> None:
         set_timer_slack(1)
         set_realtime_priority(self.settings.realtime_priority)
         daq = self._daq
+        if self._waits():
+            self._wait_for_graph()  # then open: the DAQ's port opening may start the sender
         routes = {
             q: (self._outputs[QUANTITY_TOPICS[q]], self._builders[QUANTITY_TOPICS[q]])
             for q in self._quantities

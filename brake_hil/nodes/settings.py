@@ -118,7 +118,9 @@ class PressureSourceSettings:
     priority and the node's other threads one below. ``spin_margin_us``: replay pacing needs
     no tighter timing than the kernel's wake-up. A replay waits (at most ``wait_timeout``)
     until every published topic has ``wait_for_subscribers`` subscribers and every topic of
-    ``wait_for_topics`` (``/topic`` or ``/topic:N``) has one (or N), then ``start_delay``.
+    ``wait_for_topics`` (``/topic`` or ``/topic:N``) has one (or N), then ``start_delay``. In
+    ``can`` mode the same wait, when asked for, comes before the DAQ is opened (a rig or an
+    emulator that starts sending once its port is open sends to a matched graph).
     """
 
     mode: str = parameter("replay", "replay: a recording; can: the rig's DAQ over CAN")
@@ -140,11 +142,11 @@ class PressureSourceSettings:
         "replay: shift (first sample stamped now, spacing kept) or keep (recorded stamps)",
     )
     exit_at_end: bool = parameter(False, "replay: exit when the replay ends")
-    wait_for_subscribers: int = parameter(0, "replay: start once each topic has this many")
+    wait_for_subscribers: int = parameter(0, "start once each topic has this many")
     wait_for_topics: tuple[str, ...] = parameter(
-        ("",), 'replay: and these topics ("/topic" or "/topic:N"); [""]: none'
+        ("",), 'and these topics ("/topic" or "/topic:N"); [""]: none'
     )
-    wait_timeout: float = parameter(10.0, "replay: start anyway after this wait", "s")
+    wait_timeout: float = parameter(10.0, "start anyway after this wait", "s")
     start_delay: float = parameter(
         0.5, "replay: delay after the wait, before the first sample", "s"
     )
