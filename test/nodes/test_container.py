@@ -296,3 +296,23 @@ def test_sigterm_mid_run_stops_every_node_and_loses_nothing_published(
         (spec.name for spec in samples), published
     )
     assert (tmp_path / "comparator.json").is_file()
+
+
+@pytest.mark.parametrize(
+    "wait", [[], ["-p", "wait_for_subscribers:=1"]], ids=["at-once", "waiting"]
+)
+def test_an_unknown_can_interface_exits_2_with_one_line(wait: list[str]) -> None:
+    """Refused at start, also when the DAQ is to be opened only after the wait for subscribers
+    (the chain over CAN asks for that wait)."""
+    done = subprocess.run(
+        [sys.executable, "-m", "brake_hil.nodes.pressure_source"]
+        + ["--ros-args", "-p", "mode:=can", "-p", "can_interface:=nonsense", *wait],
+        env=ros_environment(),
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+    assert done.returncode == 2, done.stdout + done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and "CAN interface 'nonsense'" in lines[0], lines
