@@ -173,18 +173,24 @@ def test_a_model_paired_with_no_source_beside_it_exits_2_with_one_line(tmp_path:
     )
     assert done.stderr.strip().splitlines() == [expected], done.stderr
     assert (tmp_path / "bag" / "metadata.yaml").is_file()  # the recorder built first was closed
-    alone = subprocess.run(
-        [sys.executable, "-m", "brake_hil.nodes.caliper_model"]
-        + ["--ros-args", "-p", "paired_with_source:=true"],
+    _exits_2_with_one_line(
+        "caliper_model", ["-p", "paired_with_source:=true"], "paired_with_source needs the"
+    )
+
+
+def _exits_2_with_one_line(node: str, ros_args: list[str], words: str) -> None:
+    """The node run alone as its script exits 2 with one error line containing ``words``."""
+    done = subprocess.run(
+        [sys.executable, "-m", f"brake_hil.nodes.{node}", "--ros-args", *ros_args],
         env=ros_environment(),
         capture_output=True,
         text=True,
         timeout=120,
         check=False,
     )
-    assert alone.returncode == 2, alone.stdout + alone.stderr
-    lines = alone.stderr.strip().splitlines()
-    assert len(lines) == 1 and "paired_with_source needs the pressure_source" in lines[0], lines
+    assert done.returncode == 2, done.stdout + done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and words in lines[0], lines
 
 
 @pytest.mark.parametrize(
@@ -304,15 +310,5 @@ def test_sigterm_mid_run_stops_every_node_and_loses_nothing_published(
 def test_an_unknown_can_interface_exits_2_with_one_line(wait: list[str]) -> None:
     """Refused at start, also when the DAQ is to be opened only after the wait for subscribers
     (the chain over CAN asks for that wait)."""
-    done = subprocess.run(
-        [sys.executable, "-m", "brake_hil.nodes.pressure_source"]
-        + ["--ros-args", "-p", "mode:=can", "-p", "can_interface:=nonsense", *wait],
-        env=ros_environment(),
-        capture_output=True,
-        text=True,
-        timeout=120,
-        check=False,
-    )
-    assert done.returncode == 2, done.stdout + done.stderr
-    lines = done.stderr.strip().splitlines()
-    assert len(lines) == 1 and "CAN interface 'nonsense'" in lines[0], lines
+    args = ["-p", "mode:=can", "-p", "can_interface:=nonsense", *wait]
+    _exits_2_with_one_line("pressure_source", args, "CAN interface 'nonsense'")
