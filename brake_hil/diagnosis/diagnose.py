@@ -26,7 +26,7 @@ from brake_hil.analysis import signals
 from brake_hil.analysis.characterization import characterize
 from brake_hil.analysis.recording import Recording
 from brake_hil.diagnosis.calibration import Calibration, calibrate
-from brake_hil.diagnosis.candidates import CANDIDATES, candidate
+from brake_hil.diagnosis.candidates import CANDIDATES, candidate, own_columns
 from brake_hil.diagnosis.dataset import Dataset, prepare
 from brake_hil.diagnosis.evidence import Evidence, collect
 from brake_hil.diagnosis.fitting import Fit, Model, fit
@@ -783,14 +783,8 @@ def _gain(baseline: Fit, fitted: Fit) -> float:
 
 def _plausible(fit: Fit) -> bool:
     """Every effect's fitted parameters describe that physics (see Candidate.plausible)."""
-    column = 0
-    for name in fit.effects:
-        model = candidate(name)
-        size = len(model.parameters)
-        if not model.plausible(fit.theta[column : column + size]):
-            return False
-        column += size
-    return True
+    members = [candidate(name) for name in fit.effects]
+    return all(member.plausible(own) for member, own in own_columns(members, fit.theta))
 
 
 def _explain(

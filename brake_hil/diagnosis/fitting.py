@@ -16,7 +16,13 @@ import numpy as np
 import scipy.optimize
 
 from brake_hil.diagnosis.calibration import MODEL_ERROR, Calibration, apply_multipliers
-from brake_hil.diagnosis.candidates.base import Candidate, Context, Draft, rig_context
+from brake_hil.diagnosis.candidates.base import (
+    Candidate,
+    Context,
+    Draft,
+    own_columns,
+    rig_context,
+)
 from brake_hil.diagnosis.dataset import Dataset, Window
 from brake_hil.diagnosis.engine import ModelSpec, simulate_batch
 from brake_hil.errors import FitError
@@ -133,10 +139,8 @@ class Model:
             ]
         )
         rows = np.tile(theta, (len(windows), 1))
-        column = 0
-        for candidate, size in zip(self.candidates, self.sizes):
-            candidate.fill(draft, rows[:, column : column + size], self.context)
-            column += size
+        for candidate, own in own_columns(self.candidates, rows):
+            candidate.fill(draft, own, self.context)
         return draft.spec()
 
     def _span(self, window: Window, span: float | None) -> tuple[int, int, BoolArray]:

@@ -2,9 +2,9 @@
 
 A candidate that cuts the held-out error may still be a *stand-in*: a flexible term that
 absorbs a misfit of another cause. Four checks, each on the fitted hypothesis, none reading
-a label (a fourth comparison, against the generic forms of the misfit, needs only numbers of
-the summary and is in the decision itself, for every hypothesis:
-:data:`brake_hil.diagnosis.diagnose.FORM_RATIO`):
+a label. (One more comparison, against the generic forms of the misfit, needs only numbers
+of the summary and is in the decision itself, for every hypothesis:
+:data:`brake_hil.diagnosis.diagnose.FORM_RATIO`.)
 
 * **Channels** (:func:`channel_check`): the error it removes is on the channels its physics
   reaches (the catalogue entry's ``channels``), not almost all on others.
@@ -36,7 +36,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from brake_hil.diagnosis.calibration import Calibration
-from brake_hil.diagnosis.candidates import candidate
+from brake_hil.diagnosis.candidates import candidate, own_columns
 from brake_hil.diagnosis.dataset import Dataset
 from brake_hil.diagnosis.fitting import Fit, Model, fit
 from brake_hil.diagnosis.residual_forms import FORMS, baseline_predictions, describe_residual
@@ -173,26 +173,19 @@ def segment_check(model: Model, hypothesis: Fit) -> CheckOutcome:
                         f"low to high pressure): a constant of this physics would not",
                     )
     if len(raw) >= 2:
-        rows = np.vstack(raw)
-        column = 0
-        for member in model.candidates:
-            size = len(member.parameters)
-            finding = member.segments_disagree(rows[:, column : column + size])
+        for member, columns in own_columns(model.candidates, np.vstack(raw)):
+            finding = member.segments_disagree(columns)
             if finding is not None:
                 return CheckOutcome("segments", False, finding)
-            column += size
     return CheckOutcome("segments", True, f"its parameters agree over {len(per_segment)} segments")
 
 
 def leftover_check(model: Model, hypothesis: Fit) -> CheckOutcome:
     """What the hypothesis leaves is not a form its physics leaves no room for."""
     rules: dict[str, list[str]] = {}  # form -> channels
-    column = 0
-    for member in model.candidates:
-        size = len(member.parameters)
-        for channel, form in member.leaves_no(hypothesis.theta[column : column + size]).items():
+    for member, own in own_columns(model.candidates, hypothesis.theta):
+        for channel, form in member.leaves_no(own).items():
             rules.setdefault(form, []).append(channel)
-        column += size
     if not rules:
         return CheckOutcome("leftover", True, "nothing its physics rules out")
     forms = tuple(f for f in FORMS if f.name in rules)

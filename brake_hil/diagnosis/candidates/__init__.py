@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Iterator, Sequence
 from typing import overload
 
-from brake_hil.diagnosis.candidates.base import Candidate
+from brake_hil.diagnosis.candidates.base import Candidate, own_columns
 from brake_hil.diagnosis.candidates.bore_friction import BoreFriction
 from brake_hil.diagnosis.candidates.eccentric_load import EccentricLoad
 from brake_hil.diagnosis.candidates.entrained_air import EntrainedAir
@@ -28,6 +28,7 @@ __all__ = [
     "CANDIDATES",
     "Candidate",
     "candidate",
+    "own_columns",
     "register_candidate",
     "unregister_candidate",
 ]

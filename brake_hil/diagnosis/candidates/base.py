@@ -17,6 +17,7 @@ benchmark does not fit the very equations that made its data.
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from typing import ClassVar, NamedTuple
 
@@ -170,3 +171,18 @@ class Candidate:
     def describe(cls) -> str:
         """The physical description: the class docstring's first paragraphs, one line."""
         return " ".join((cls.__doc__ or "").split())
+
+
+def own_columns(
+    members: Iterable[Candidate], values: FloatArray
+) -> Iterator[tuple[Candidate, FloatArray]]:
+    """Each candidate with its own parameters' columns of ``values`` (the last axis).
+
+    A fitted parameter vector (or rows of them) holds the candidates' own parameters first,
+    one after another in ``members``' order (``Model.effect_size``), then the calibration's.
+    """
+    column = 0
+    for member in members:
+        size = len(member.parameters)
+        yield member, values[..., column : column + size]
+        column += size
