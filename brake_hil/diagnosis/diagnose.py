@@ -258,11 +258,11 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         baseline_predictions(baseline_model, baseline.theta),
         noise_cost=dataset.noise_cost(),
     )
-    form_gain = residual.forms[0].improvement if residual.forms else 1.0
+    form_gains = {f"{f.form} {f.channel}": f.improvement for f in residual.forms}
     ruled_out = unnameable_pairs(baseline, singles)
     pairs = _fit_pairs(calibration, dataset, baseline, singles, unfitted, say, ruled_out)
     summary = summarise(
-        baseline, singles, pairs, dataset.noise_cost(), evidence, ruled_out, form_gain
+        baseline, singles, pairs, dataset.noise_cost(), evidence, ruled_out, form_gains
     )
     verdict = decide(summary)
     chosen_set = set(verdict.chosen or ())
@@ -271,7 +271,7 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         say("fitting the pairs left out, as rivals of the verdict")
         pairs = _fit_pairs(calibration, dataset, baseline, singles, unfitted, say)
         summary = summarise(
-            baseline, singles, pairs, dataset.noise_cost(), evidence, form_gain=form_gain
+            baseline, singles, pairs, dataset.noise_cost(), evidence, form_gains=form_gains
         )
         verdict = decide(summary)
     hypotheses = singles + pairs
@@ -451,6 +451,18 @@ class Summary:
     pairs_ruled_out: tuple[tuple[str, ...], ...] = ()  # not fitted: can never be named
     stand_ins: dict[str, str] = field(default_factory=dict)  # "a+b": the physics check failed
     form_gain: float = 1.0  # the best generic form's held-out improvement (residual_forms)
+    form_gains: dict[str, float] = field(default_factory=dict)  # "form channel": improvement
+
+    def form_bar(self, effects: tuple[str, ...]) -> float:
+        """The best generic form's improvement that counts against ``effects``.
+
+        Forms that are one of the effects' own physics in a free shape
+        (``Candidate.kin_forms``) do not count; without per-form gains, the best form's.
+        """
+        if not self.form_gains:
+            return self.form_gain
+        kin = {f"{form} {channel}" for e in effects for form, channel in candidate(e).kin_forms}
+        return max((g for key, g in self.form_gains.items() if key not in kin), default=1.0)
 
     @property
     def floor_cost(self) -> float:
@@ -501,6 +513,7 @@ class Summary:
             pairs_ruled_out=tuple(tuple(p) for p in document.get("pairs_ruled_out", ())),
             stand_ins=dict(document.get("stand_ins", {})),
             form_gain=float(document.get("form_gain", 1.0)),
+            form_gains={str(k): float(v) for k, v in document.get("form_gains", {}).items()},
         )
 
 
@@ -511,7 +524,7 @@ def summarise(
     noise_cost: float,
     evidence: Evidence,
     pairs_ruled_out: frozenset[tuple[str, ...]] = frozenset(),
-    form_gain: float = 1.0,
+    form_gains: dict[str, float] | None = None,
 ) -> Summary:
     """The decision's inputs from the fits.
 
@@ -539,7 +552,8 @@ def summarise(
         pairs=tuple(hypothesis(h) for h in pairs),
         baseline_channel_nrmse=dict(baseline.held_out_nrmse),
         pairs_ruled_out=tuple(sorted(pairs_ruled_out)),
-        form_gain=form_gain,
+        form_gain=max((form_gains or {}).values(), default=1.0),
+        form_gains=dict(form_gains or {}),
     )
 
 
@@ -619,7 +633,8 @@ def hypothesis_note(summary: Summary, effects: tuple[str, ...], verdict: Verdict
     if not identified(summary, h):
         return (
             f"not named: cuts the error {gain:.2f} times, no more than {FORM_RATIO:g} times "
-            f"what a generic form of the misfit does ({summary.form_gain:.2f}): not identified"
+            f"what a generic form of the misfit does ({summary.form_bar(h.effects):.2f}): "
+            "not identified"
         )
     chosen = known.get(verdict.chosen) if verdict.chosen is not None else None
     if chosen is not None:
@@ -701,9 +716,8 @@ def decide(summary: Summary) -> Verdict:
     cap = [STAND_IN_MARGIN] if rejected else []
     # Hypotheses that would have been named (before the chosen one) but for a generic form
     # doing as well: the verdict is no surer than the nearest stayed below that bar.
-    form_bar = math.log(FORM_RATIO * summary.form_gain)
     below_bar = [
-        form_bar - log_gains[h.effects]
+        math.log(FORM_RATIO * summary.form_bar(h.effects)) - log_gains[h.effects]
         for h in passing[: passing.index(chosen) if chosen is not None else len(passing)]
     ]
     cap += [min(below_bar)] if below_bar else []
@@ -756,7 +770,7 @@ def identified(summary: Summary, h: Hypothesis) -> bool:
     form's own offset also absorbs).
     """
     return (
-        ratio(summary.baseline_cost, h.held_out_cost) >= FORM_RATIO * summary.form_gain
+        ratio(summary.baseline_cost, h.held_out_cost) >= FORM_RATIO * summary.form_bar(h.effects)
         or h.held_out_cost <= NOISE_EXCESS * summary.noise_cost
     )
 

@@ -85,7 +85,9 @@ def read_improved_model(path: Path) -> ImprovedModel:
         parameters = {str(k): float(v) for k, v in document["parameters"].items()}
         for name in effects:
             for parameter in candidate(name).parameters:
-                if parameter.name not in parameters:
+                if parameter.name not in parameters and parameter.absent is not None:
+                    parameters[parameter.name] = parameter.absent  # an older file's model
+                elif parameter.name not in parameters:
                     raise ImprovedModelError(
                         f"{path}: missing parameter '{parameter.name}' of {name}"
                     )

@@ -180,15 +180,20 @@ CATALOGUE = _Catalogue(
             title="compliance of the hose between master cylinder and bore (an extra RC stage)",
             physics=(
                 "A braided hose swells with pressure and stores fluid between the valve and the "
-                "bore, which eq. 21c neglects (eq. 18 folds the walls into the bore's modulus)."
+                "bore, which eq. 21c neglects (eq. 18 folds the walls into the bore's modulus); "
+                "its rubber is viscoelastic, so part of the swell follows with a delay."
             ),
-            source="seed eqs. 13, 18, 21c",
+            source="seed eqs. 13, 18, 21c; Covas et al. (2004) for the wall's creep",
             signature=(
                 "p_b lags p_i more and its peak-to-peak is lower than predicted, more at higher "
                 "frequency; F_k and x_c follow p_b; the mismatch hardly depends on pressure"
             ),
             channels=("p_b", "F_k", "x_c"),
-            quantities=(_q("C_h", "m^3/Pa", "compliance of the hose node"),),
+            quantities=(
+                _q("C_h", "m^3/Pa", "compliance of the hose node, stored at once"),
+                _q("C_d", "m^3/Pa", "the hose wall's retarded compliance"),
+                _q("tau_w", "s", "the wall's retardation time"),
+            ),
         ),
         EffectEntry(
             name="bore_friction",

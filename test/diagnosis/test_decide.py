@@ -235,3 +235,27 @@ def test_an_effect_no_better_than_a_generic_form_is_not_identified() -> None:
     offset = dataclasses.replace(summary(single("eccentric_load", base / 300)), form_gain=310.0)
     assert offset.singles[0].held_out_cost <= diagnosis.NOISE_EXCESS * offset.noise_cost
     assert decide(offset).effects == ("eccentric_load",)
+
+
+def test_a_generic_form_that_is_the_effects_own_physics_does_not_count_against_it() -> None:
+    """Family b's eccentric load (a knee in the caliper's share of the force) cut the error
+    4-9 times, a generic static map of x_c 6-11 times: that map is the same physics in a
+    free shape (``kin_forms``), so it does not make the effect unidentified; a form of
+    another channel, or one of x_c that is not kin, still does."""
+    base = 1.0e-5
+    knee = summary(single("eccentric_load", base / 6.0))
+    gains = {"static_map x_c": 8.0, "level_gain x_c": 7.0, "extra_lag p_b": 1.2}
+    kin = dataclasses.replace(knee, form_gain=8.0, form_gains=gains)
+    assert kin.form_bar(("eccentric_load",)) == 1.2
+    assert decide(kin).effects == ("eccentric_load",)
+    for other in ("static_map F_k", "extra_lag x_c"):
+        rival = dataclasses.replace(kin, form_gains={**gains, other: 5.0})
+        assert rival.form_bar(("eccentric_load",)) == 5.0
+        assert decide(rival).effects == ("unexplained",)
+    # another candidate is judged against every form, the kin of eccentric_load included
+    slip = dataclasses.replace(kin, singles=(single("seal_stick_slip", base / 6.0),))
+    assert slip.form_bar(("seal_stick_slip",)) == 8.0
+    assert decide(slip).effects == ("unexplained",)
+    # the per-form gains are replayed from JSON
+    again = Summary.from_dict(json.loads(json.dumps(kin.as_dict())))
+    assert again == kin and decide(again) == decide(kin)

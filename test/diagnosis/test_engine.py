@@ -9,6 +9,7 @@ from brake_hil.analysis.comparison import predict
 from brake_hil.diagnosis.candidates.orifice_flow import QuadraticDrop
 from brake_hil.diagnosis.candidates.thermal_drift import LinearDrift
 from brake_hil.diagnosis.engine import FrictionElement, ModelSpec, simulate_batch
+from brake_hil.diagnosis.engine.plant import Coupling, build_plant
 from brake_hil.physics.excitation import pulsing_profile
 from brake_hil.physics.parameters import derive_parameters
 from brake_hil.physics.rig import Rig
@@ -92,3 +93,47 @@ def test_batch_rows_are_independent(default_rig: Rig, rig_input) -> None:  # typ
     )
     assert np.allclose(two[1], one[0])
     assert not np.allclose(two[0], one[0])
+
+
+def _bore_response(default_rig: Rig, coupling: Coupling, hz: float) -> complex:
+    """p_b / p_i of the linear plant at ``hz`` (complex gain)."""
+    plant = build_plant(derive_parameters(default_rig, 1.08e6), coupling)
+    n = plant.A.shape[0]
+    state = np.linalg.solve(2j * np.pi * hz * np.eye(n) - plant.A, plant.B)
+    return complex(plant.C[0] @ state)
+
+
+def test_a_creeping_hose_wall_stores_every_volume_the_node_takes(default_rig: Rig) -> None:
+    """Node balance: Q_p - Q_h = C_h p_h' + C_d p_r' in every state (scaled rows of A)."""
+    coupling = Coupling(
+        hose_compliance=4e-15, hose_creep_compliance=3e-15, hose_creep_time=0.02
+    )
+    plant = build_plant(derive_parameters(default_rig, 1.08e6), coupling)
+    i, s = plant.index, plant.scale
+    stored = 4e-15 * s[i["p_h"]] * plant.A[i["p_h"]] + 3e-15 * s[i["p_r"]] * plant.A[i["p_r"]]
+    inflow = np.zeros_like(stored)
+    inflow[i["Q_p"]], inflow[i["Q_h"]] = s[i["Q_p"]], -s[i["Q_h"]]
+    assert np.allclose(stored, inflow, rtol=1e-9, atol=1e-9 * np.max(np.abs(inflow)))
+
+
+def test_a_creeping_hose_wall_lies_between_its_instant_and_its_full_compliance(
+    default_rig: Rig,
+) -> None:
+    """Creep far faster than the 5 Hz excitation is the full compliance C_h + C_d; far
+    slower, the instant C_h alone; between, a lag neither gives."""
+    instant, retarded = 4e-13, 8e-13
+
+    def response(creep_time: float | None, compliance: float = instant) -> complex:
+        coupling = Coupling(
+            hose_compliance=compliance,
+            hose_creep_compliance=None if creep_time is None else retarded,
+            hose_creep_time=creep_time or 0.02,
+        )
+        return _bore_response(default_rig, coupling, 5.0)
+
+    full, alone = response(None, instant + retarded), response(None)
+    assert abs(response(1e-6) - full) < 1e-3 * abs(full)
+    assert abs(response(1e3) - alone) < 1e-3 * abs(alone)
+    between = response(0.03)
+    assert min(abs(between - full), abs(between - alone)) > 1e-3 * abs(alone)
+    assert np.angle(full) < np.angle(alone)  # more compliance: more lag

@@ -46,7 +46,12 @@ def _model(effects: tuple[str, ...], parameters: dict[str, float]) -> ImprovedMo
         ),
         (
             ("hose_compliance", "orifice_flow"),
-            {"hose_compliance_ratio": 2.0, "turbulent_share": 0.5},
+            {
+                "hose_compliance_ratio": 2.0,
+                "hose_creep_ratio": 0.8,
+                "hose_creep_time": 0.03,
+                "turbulent_share": 0.5,
+            },
         ),
         (
             ("seal_groove_asymmetry", "thermal_drift"),
@@ -85,6 +90,24 @@ def test_malformed_files_are_refused_naming_the_file(tmp_path: Path) -> None:
     path.write_text(json.dumps(document))
     with pytest.raises(ImprovedModelError, match="unknown effect 'warp_drive'"):
         read_improved_model(path)
+
+
+def test_an_older_hose_model_without_creep_loads_as_the_elastic_hose_it_was(
+    tmp_path: Path,
+) -> None:
+    """A file written before the hose's creep existed means no creep; one that has the
+    creep predicts differently (the parameters are used, not ignored)."""
+    _, pressure = pulsing_profile((1.38e6,), ramp_s=0.5, pulsing_s=1.5)
+    older = _model(("hose_compliance",), {"hose_compliance_ratio": 2.0}).as_dict()
+    path = tmp_path / "older.json"
+    path.write_text(json.dumps(older))
+    read = read_improved_model(path).parameters
+    assert read["hose_creep_ratio"] == 0.0 and read["hose_creep_time"] > 0.0
+    elastic = load_improved_model(path, mean_pressure=1.1e6).batch(pressure)
+    creeping = {"hose_compliance_ratio": 2.0, "hose_creep_ratio": 1.0, "hose_creep_time": 0.03}
+    newer = _model(("hose_compliance",), creeping).save(tmp_path / "newer.json")
+    crept = load_improved_model(newer, mean_pressure=1.1e6).batch(pressure)
+    assert np.max(np.abs(crept[0] - elastic[0])) > 1e-3 * np.ptp(elastic[0])
 
 
 def test_the_caliper_node_loader_reads_an_improved_model(tmp_path: Path) -> None:

@@ -45,6 +45,7 @@ class CandidateParameter(NamedTuple):
     high: float
     start: float
     logarithmic: bool = False  # search on log(value) (positive quantities spanning decades)
+    absent: float | None = None  # its value in a model file older than it (None: required)
 
 
 @dataclass(frozen=True)
@@ -117,6 +118,9 @@ class Candidate:
 
     entry: ClassVar[EffectEntry]  # what the effect is (name, physics, source, signature)
     parameters: ClassVar[tuple[CandidateParameter, ...]]
+    kin_forms: ClassVar[frozenset[tuple[str, str]]] = frozenset()
+    """Generic forms ``(form, channel)`` (:mod:`..residual_forms`) that are this physics in a
+    free shape: one that describes the misfit as well does not make it unidentified."""
 
     @property
     def name(self) -> str:

@@ -54,6 +54,7 @@ class EccentricLoad(Candidate):
     """
 
     entry = CATALOGUE["eccentric_load"]
+    kin_forms = frozenset({("static_map", "x_c"), ("level_gain", "x_c")})  # x_c's gain vs load
     parameters = (
         CandidateParameter("share_offset", "-", -0.6, 0.6, 0.0),
         CandidateParameter("share_slope", "-", -0.4, 0.4, 0.0),

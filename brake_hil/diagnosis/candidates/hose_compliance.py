@@ -21,15 +21,19 @@ from brake_hil.types import FloatArray
 class HoseNode(Term):
     """A node of compliance ``C_h`` between the pipe and valve and the hose."""
 
-    compliance: FloatArray  # m^3/Pa, C_h
+    compliance: FloatArray  # m^3/Pa, C_h, the part stored at once
     resistance_share: FloatArray  # -, part of the line resistance beyond the node
+    creep_compliance: FloatArray  # m^3/Pa, C_d, the wall's retarded part
+    creep_time: FloatArray  # s, tau_w, its retardation time
 
     linear = True
 
     def couple(self, coupling: Coupling, row: int, entry: Entry) -> None:
-        """Split the line at the node."""
+        """Split the line at the node; the node's wall swells partly with a delay."""
         coupling.hose_compliance = float(self.compliance[row])
         coupling.hose_resistance_share = float(self.resistance_share[row])
+        coupling.hose_creep_compliance = float(self.creep_compliance[row])
+        coupling.hose_creep_time = float(self.creep_time[row])
 
 
 class HoseCompliance(Candidate):
@@ -40,19 +44,24 @@ class HoseCompliance(Candidate):
     swelling is a compliance of its own between the valve and the bore: one lumped node of
     compliance ``C_h`` that splits the line into an upstream part (pipe and valve: their
     resistance, eq. 13, and 70 % of the inertance) and a downstream one (the hose's own
-    resistance ``R_t`` and the rest) (Merritt 1967, ch. 4, lumped transmission line).
+    resistance ``R_t`` and the rest) (Merritt 1967, ch. 4, lumped transmission line). A
+    rubber hose wall is viscoelastic: part of its swell ``C_d`` follows the pressure with a
+    retardation time ``tau_w`` (a Kelvin-Voigt element; Covas et al., J. Hydraulic Research
+    42(5), 2004), so the stored volume and the bore pressure's lag depend on the frequency.
     """
 
     entry = CATALOGUE["hose_compliance"]
     parameters = (
         CandidateParameter("hose_compliance_ratio", "-", 0.02, 20.0, 0.5, logarithmic=True),
+        CandidateParameter("hose_creep_ratio", "-", 0.01, 5.0, 0.3, True, absent=0.0),
+        CandidateParameter("hose_creep_time", "s", 0.002, 0.3, 0.02, True, absent=0.02),
     )
 
     def fill(self, draft: Draft, theta: FloatArray, context: Context) -> None:
-        """A hose node whose compliance is a multiple of the bore's."""
-        compliance = np.array([p.bore_compliance for p in draft.params])
+        """A hose node whose compliance is a multiple of the bore's, part of it retarded."""
+        compliance = theta[:, 0] * np.array([p.bore_compliance for p in draft.params])
         share = np.full(len(draft.params), context.hose_resistance_share)
-        draft.add(HoseNode(theta[:, 0] * compliance, share))
+        draft.add(HoseNode(compliance, share, theta[:, 1] * compliance, theta[:, 2]))
 
     def consistent(self, evidence: dict[str, float]) -> bool:
         """The bore pressure is mispredicted."""

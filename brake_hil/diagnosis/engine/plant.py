@@ -29,6 +29,7 @@ __all__ = [
 STATE_SCALE = {
     "Q_p": 1e-6,
     "p_h": 1e6,
+    "p_r": 1e6,
     "Q_h": 1e-6,
     "p_b": 1e6,
     "x_p": 1e-6,
@@ -62,6 +63,8 @@ class Coupling:
     extra_compliance: float = 0.0  # m^3/Pa, added to the bore's C_b
     hose_compliance: float | None = None  # m^3/Pa, a node between pipe and hose (None: none)
     hose_resistance_share: float = 0.3  # -, part of R beyond the hose node
+    hose_creep_compliance: float | None = None  # m^3/Pa, the node wall's retarded part C_d
+    hose_creep_time: float = 0.02  # s, tau_w, its retardation time
 
 
 @dataclass(frozen=True)
@@ -86,8 +89,9 @@ def build_plant(p: ModelParameters, coupling: Coupling) -> Plant:
     bore_compliance = p.bore_compliance + coupling.extra_compliance
     hose_compliance = coupling.hose_compliance
     names = ["Q_h", "p_b", "x_p", "v_p", "x_c", "v_c"]
+    creep = coupling.hose_creep_compliance if hose_compliance is not None else None
     if hose_compliance is not None:
-        names = ["Q_p", "p_h", *names]
+        names = ["Q_p", "p_h", *(["p_r"] if creep is not None else []), *names]
     n = len(names)
     i = {name: k for k, name in enumerate(names)}
     A = np.zeros((n, n))
@@ -111,6 +115,11 @@ def build_plant(p: ModelParameters, coupling: Coupling) -> Plant:
         A[i["Q_h"], i["p_h"]] = 1.0 / i_hose
         A[i["Q_h"], i["Q_h"]] = -r_hose / i_hose
         A[i["Q_h"], i["p_b"]] = -1.0 / i_hose
+        if creep is not None:  # the wall's retarded swell: C_d (p_h - p_r) / tau_w more stored
+            rate = 1.0 / coupling.hose_creep_time
+            A[i["p_r"], i["p_h"]], A[i["p_r"], i["p_r"]] = rate, -rate
+            A[i["p_h"], i["p_h"]] = -creep * rate / hose_compliance
+            A[i["p_h"], i["p_r"]] = creep * rate / hose_compliance
     A[i["p_b"], i["Q_h"]] = 1.0 / bore_compliance
     A[i["p_b"], i["v_p"]] = -p.piston_area / bore_compliance
     A[i["p_b"], i["v_c"]] = p.piston_area / bore_compliance
