@@ -87,6 +87,17 @@ def test_a_delay_is_the_same_at_every_amplitude() -> None:
     # (a true late p_i of family b came out 0.11, 0.84, 0.95 ms)
     drifting_lead = np.array([[-0.11e-3] * 3, [-0.84e-3] * 3, [-0.95e-3] * 3])
     assert delay.segments_disagree(drifting_lead) is None
+    # a true late x_c (b801 case 79): p_b's calibrated phase moves with the segment, and
+    # beside it F_k looks skewed -0.68, -0.56, -0.44 ms; only the most skewed channel, x_c,
+    # is judged, and it holds
+    late_x_c = np.array(
+        [[0.68e-3, 0.0, 3.70e-3], [0.56e-3, 0.0, 3.68e-3], [0.44e-3, 0.0, 3.71e-3]]
+    )
+    assert delay.segments_disagree(late_x_c) is None
+    # ... and the same F_k beside an x_c whose skew shrinks is refused, naming x_c
+    loop = late_x_c * np.array([[1.0, 1.0, 1.0], [1.0, 1.0, 0.7], [1.0, 1.0, 0.5]])
+    finding = delay.segments_disagree(loop)
+    assert finding is not None and "skew of x_c" in finding
     # no channel skewed: nothing this check can judge (the generic test still runs)
     small = np.array([[-0.17e-3, 0.0, 0.0], [-0.08e-3, 0.0, 0.0], [0.1e-3, 0.0, 0.0]])
     assert delay.segments_disagree(small) is None
