@@ -83,7 +83,9 @@ verdicts 1.53-1400 times the best form, wrong ones (a load cell's hysteresis nam
 noise's share. Not asked of a hypothesis that leaves the noise alone (:func:`identified`).
 On the fresh seed 801 (312 cases per family, README) it did not hold for family b's
 eccentric load: a generic static map of ``x_c``, that physics in a free shape, cut six right
-singles' error 0.85-2 times as much as the candidate did, and they went to ``unexplained``."""
+singles' error 0.85-2 times as much as the candidate did, and they went to ``unexplained``.
+Since then a form that is a hypothesis's own physics in a free shape (``Candidate.kin_forms``)
+does not count against it (:meth:`Summary.form_bar`)."""
 STAND_IN_MARGIN = 0.0
 """Decision margin (log units) a verdict keeps at most when a better-scoring hypothesis was
 set aside by a physics check (:mod:`.physics_checks`): confidence at most
@@ -764,7 +766,8 @@ def decide(summary: Summary) -> Verdict:
 def identified(summary: Summary, h: Hypothesis) -> bool:
     """The hypothesis explains the misfit better than a generic form of it could.
 
-    It cuts the held-out error ``FORM_RATIO`` times more than the best generic form, or it
+    It cuts the held-out error ``FORM_RATIO`` times more than the best generic form that is
+    not its own physics in a free shape (:meth:`Summary.form_bar`), or it
     leaves no more than ``NOISE_EXCESS`` times the noise's share (then it explains all there
     is to explain, and a form that does as well cannot tell them apart: an offset that a
     form's own offset also absorbs).
