@@ -114,8 +114,9 @@ class HoseCompliance(Effect):
         Parameter("segments", "-", 1, 16, "N, lumped hose segments"),
     )
     diagnosis_model = (
-        "one lumped RC stage (a single extra compliance between the valve and the bore); "
-        "the simulator's line is a ladder of several R-I-C segments"
+        "one lumped RC stage (a single extra compliance between the valve and the bore, "
+        "its wall partly retarded); the simulator's line is a ladder of several elastic "
+        "R-I-C segments"
     )
 
     def __post_init__(self) -> None:

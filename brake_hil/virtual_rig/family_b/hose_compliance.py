@@ -101,9 +101,9 @@ class HoseComplianceB(FamilyBEffect, effect="hose_compliance"):
         Parameter("creep_time", "s", 1.0e-3, 1.0, "tau_w, the wall's retardation time"),
     )
     diagnosis_model = (
-        "one lumped RC stage (a single extra compliance between the valve and the bore); "
-        "the simulator's node sits mid-hose and its wall creeps, so the compliance it "
-        "stores depends on the frequency"
+        "one lumped RC stage between the valve and the bore whose wall creeps too "
+        "(Kelvin-Voigt, since 2026-11-26: the same form as this law); the simulator's node "
+        "sits mid-hose and takes the line's fluid and the steel pipe's swell"
     )
 
     @classmethod
