@@ -8,6 +8,7 @@ one runs slcan over a pseudo-terminal pair (:class:`SlcanPty`), which needs pyse
 from __future__ import annotations
 
 from collections.abc import Iterator
+import contextlib
 from pathlib import Path
 import threading
 import time
@@ -289,6 +290,44 @@ def test_frames_over_slcan_on_a_pty_decode_to_the_values_sent(tmp_path: Path) ->
         for quantity, value in sample.values.items():
             assert value == values[quantity][sample.counter]
     assert health.crc_errors == health.bus_errors == health.lost_samples == 0
+
+
+def test_an_emulated_adapter_that_closes_lets_its_reader_read_what_it_sent(
+    tmp_path: Path,
+) -> None:
+    """Closing a pseudo-terminal discards what its reader has not read: a busy reader lost
+    a run's last 18 samples so. The adapter waits (``drain_s``) until the reader has read
+    them; without the wait the same reader gets none."""
+    pytest.importorskip("serial", reason="python-can's slcan interface needs pyserial")
+    count = 40  # 120 frames, under a pseudo-terminal's 4 KiB buffer
+    values = measured_samples(count, seed=2)
+    codec = RigFrameCodec()
+    received = []
+    for drain_s in (5.0, 0.0):
+        link = tmp_path / f"rig_can_{drain_s:g}"
+        device = SlcanPty(link)
+        daq = CanDaq("slcan", str(link), 1_000_000, bus_kwargs={"sleep_after_open": 0})
+        assert poll_until_open(device, daq)
+        for k in range(count):
+            assert device.send(codec.encode(k, {q: values[q][k] for q in QUANTITIES}))
+        assert device.unread() > 0  # nothing read yet: the reader is busy elsewhere
+        closing = threading.Thread(target=device.close, args=(drain_s,))
+        closing.start()
+        time.sleep(0.3)  # the reader comes back late
+        received.append(len(poll_until(daq, 3 * count, timeout_s=5.0)))
+        closing.join()
+        with contextlib.suppress(can.CanError):  # its adapter is gone: "C" cannot be sent
+            daq.close()
+    assert received == [3 * count, 0]
+
+
+def poll_until_open(device: SlcanPty, daq: CanDaq, timeout_s: float = 5.0) -> bool:
+    """Answer the reader's commands until it has opened the channel (the DAQ opens its
+    adapter when polled)."""
+    deadline = time.monotonic() + timeout_s
+    while not device.poll_reader() and time.monotonic() < deadline:
+        assert daq.poll(timeout=0.01) == []
+    return device.reader_open
 
 
 def test_a_frozen_sample_counter_is_never_fresh() -> None:
