@@ -278,9 +278,7 @@ without a trend, says the rig file is off. A series with fewer than {MIN_RUNS} u
 says nothing. On steady synthetic rigs these rules wrote a line for under 1 % of fleets.</p>"""
 
 
-def _html(
-    trends: Sequence[RigTrend], figures: Sequence[str], database: Path | str | None
-) -> str:
+def _html(trends: Sequence[RigTrend], figures: Sequence[str], database: Path | str | None) -> str:
     when = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
     source = html.escape(str(database)) if database is not None else "not given"
     sections = "\n".join(_rig_section(t, f) for t, f in zip(trends, figures))

@@ -401,8 +401,7 @@ def _judge_value(
     if (off := max(above, below)) >= OFFSET_SHARE * count:
         runs = "every run" if off == count else f"{off} of {count} runs"
         cause = (
-            f"the calibrated LTI model stands in with it for the {stands_in}, "
-            "not a rig-file error"
+            f"the calibrated LTI model stands in with it for the {stands_in}, not a rig-file error"
             if stands_in is not None
             else "update the rig file"
         )

@@ -105,9 +105,7 @@ def _bore_response(default_rig: Rig, coupling: Coupling, hz: float) -> complex:
 
 def test_a_creeping_hose_wall_stores_every_volume_the_node_takes(default_rig: Rig) -> None:
     """Node balance: Q_p - Q_h = C_h p_h' + C_d p_r' in every state (scaled rows of A)."""
-    coupling = Coupling(
-        hose_compliance=4e-15, hose_creep_compliance=3e-15, hose_creep_time=0.02
-    )
+    coupling = Coupling(hose_compliance=4e-15, hose_creep_compliance=3e-15, hose_creep_time=0.02)
     plant = build_plant(derive_parameters(default_rig, 1.08e6), coupling)
     i, s = plant.index, plant.scale
     stored = 4e-15 * s[i["p_h"]] * plant.A[i["p_h"]] + 3e-15 * s[i["p_r"]] * plant.A[i["p_r"]]

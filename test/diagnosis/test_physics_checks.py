@@ -29,9 +29,7 @@ def test_an_improvement_spread_over_channels_passes() -> None:
     spread = _fit(("seal_stick_slip",), {"p_b": 0.012, "F_k": 0.012, "x_c": 0.012})
     assert channel_check(BASELINE, spread).passed
     # a pair reaches the union of its effects' channels
-    pair = _fit(
-        ("eccentric_load", "orifice_flow"), {"p_b": 0.002, "F_k": 0.019, "x_c": 0.019}
-    )
+    pair = _fit(("eccentric_load", "orifice_flow"), {"p_b": 0.002, "F_k": 0.019, "x_c": 0.019})
     assert channel_check(BASELINE, pair).passed
 
 
