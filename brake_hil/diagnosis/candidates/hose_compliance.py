@@ -19,7 +19,7 @@ from brake_hil.types import FloatArray
 
 @dataclass(frozen=True, eq=False)
 class HoseNode(Term):
-    """A node of compliance ``C_h`` between the pipe and valve and the hose."""
+    """A node of compliance ``C_h`` between the pipe and valve and the hose; its wall creeps."""
 
     compliance: FloatArray  # m^3/Pa, C_h, the part stored at once
     resistance_share: FloatArray  # -, part of the line resistance beyond the node
