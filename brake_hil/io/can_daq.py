@@ -377,8 +377,8 @@ class CanDaq:
 
     The bus is opened by ``__enter__`` (or :meth:`open`); a bus that cannot be opened is not
     an error: the status is ADAPTER_LOST and :meth:`poll` retries. Only a configuration that
-    can never work (unknown interface, missing driver module, bad DBC) raises
-    :class:`CanDaqError`.
+    can never work raises :class:`CanDaqError`: an unknown interface or a bad DBC at once, a
+    missing driver module when the bus is first opened.
     """
 
     def __init__(
@@ -402,6 +402,11 @@ class CanDaq:
                 f"must be > 0 and reconnect_max_s ({reconnect_max_s} s) >= reconnect_min_s"
             )
             raise ValueError(msg)
+        if bus_factory is None and interface not in can.interfaces.VALID_INTERFACES:
+            raise CanDaqError(
+                f"CAN interface {interface!r} is unknown (python-can has "
+                f"{', '.join(sorted(can.interfaces.VALID_INTERFACES))})"
+            )
         self.codec = RigFrameCodec(dbc_path)
         self.interface, self.channel, self.bitrate = interface, channel, bitrate
         self.stale_after_s = stale_after_s
