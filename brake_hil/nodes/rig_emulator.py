@@ -18,8 +18,14 @@ Outputs (``output``):
     (``can_interface: slcan``, ``can_channel: <can_link_path>``). With ``can_link_path``
     empty (the default) the link is ``rig_can`` in a private folder of its own
     (``tempfile.mkdtemp``, mode 0700, removed at exit), never a fixed name in the shared temp
-    folder; its path is logged and on diagnostics (``can``). Any other value is a
-    python-can interface with ``can_channel``/``can_bitrate`` (e.g. ``socketcan`` on a rig PC).
+    folder; its path is logged and on diagnostics (``can``). While the pty's reader lags (its
+    buffer, about 20 KB, is full), a frame is held up to ``can_hold_s`` and then dropped, as a
+    bus does not lose frames because one reader is slow: the reader gets them late, the
+    playback falls behind and catches up as above. After a drop (the reader is gone or stalled
+    longer than that) no frame is held until the reader reads again, so the playback keeps its
+    pace; frames sent and dropped are on diagnostics (``can_frames_sent``,
+    ``can_frames_dropped``). Any other value is a python-can interface with
+    ``can_channel``/``can_bitrate`` (e.g. ``socketcan`` on a rig PC).
 ``both``
     Both at once.
 
@@ -119,12 +125,22 @@ def precompute_run(
 
 
 class _CanOutput:
-    """Frames of each sample to an slcan pseudo-terminal or a python-can bus."""
+    """Frames of each sample to an slcan pseudo-terminal or a python-can bus.
 
-    def __init__(self, interface: str, channel: str, bitrate: int, link: str, dbc: str) -> None:
+    ``hold_s`` (s, slcan pty only): how long a frame waits for room while the pty's reader
+    lags before it is dropped; after a drop none waits until a frame fits again (see the
+    module doc).
+    """
+
+    def __init__(
+        self, interface: str, channel: str, bitrate: int, link: str, dbc: str, hold_s: float = 0.0
+    ) -> None:
         from brake_hil.io.can_daq import RigFrameCodec, SlcanPty
 
         self.codec = RigFrameCodec(dbc or None)
+        self.hold_s = hold_s
+        self.reader_stalled = False  # a frame waited hold_s in vain; none waits until one fits
+        self.closed = False
         self.pty: Any = None
         self.bus: Any = None
         self.private: Path | None = None  # the private folder of the link, when we made it
@@ -145,7 +161,12 @@ class _CanOutput:
     def send(self, counter: int, values: dict[str, float], timestamp: float) -> None:
         frames = self.codec.encode(counter, values, timestamp)
         if self.pty is not None:
-            self.sent += self.pty.send(frames)
+            for frame in frames:
+                if self.closed:  # closing: the pty goes, the playback thread may still be here
+                    return
+                written = self.pty.send([frame], 0.0 if self.reader_stalled else self.hold_s)
+                self.reader_stalled = not written
+                self.sent += written
             return
         for frame in frames:
             try:
@@ -159,6 +180,7 @@ class _CanOutput:
         return int(self.pty.dropped) + self.errors if self.pty is not None else self.errors
 
     def close(self) -> None:
+        self.closed = True
         if self.pty is not None:
             self.pty.close()
             if self.private is not None:
@@ -209,6 +231,7 @@ class RigEmulatorNode(Node):
                 settings.can_bitrate,
                 settings.can_link_path,
                 settings.dbc_file,
+                settings.can_hold_s,
             )
             self.get_logger().info(f"CAN frames on {self._can.where}")
         self._diagnostics = self.create_publisher(

@@ -316,6 +316,9 @@ class RigEmulatorSettings:
     can_link_path: str = parameter(
         "", "symlink to the pty; empty: rig_can in a private temp folder (logged)"
     )
+    can_hold_s: float = parameter(
+        1.0, "slcan_pty: hold a frame this long while its reader lags, then drop it; 0: drop", "s"
+    )
     dbc_file: str = parameter("", "CAN database; empty: config/brake_rig.dbc")
     frame_id: str = parameter("caliper", "header.frame_id")
     wait_for_subscribers: int = parameter(
