@@ -135,3 +135,32 @@ def test_a_creeping_hose_wall_lies_between_its_instant_and_its_full_compliance(
     between = response(0.03)
     assert min(abs(between - full), abs(between - alone)) > 1e-3 * abs(alone)
     assert np.angle(full) < np.angle(alone)  # more compliance: more lag
+
+
+def test_a_reading_through_a_mode_keeps_the_static_value_and_amplifies_below_it() -> None:
+    """``ChannelReading``: unit static gain; at 5 Hz through a 36 Hz mode of damping 0.1 the
+    channel comes out ``|H(j w)|`` times larger and later, as the continuous system does
+    (``scipy.signal.lsim``); the other channels are untouched."""
+    import scipy.signal
+
+    from brake_hil.diagnosis.engine import ChannelReading
+
+    dt, f_n, zeta = 1e-3, 36.0, 0.1
+    time = np.arange(0.0, 4.0, dt)
+    signal = 2.0e6 + 1.0e6 * np.sin(2 * np.pi * 5.0 * time)
+    outputs = np.stack([signal, signal, np.full_like(time, 3.0e-5)])[None].copy()
+    reading = ChannelReading(0, np.array([f_n]), np.array([zeta]))
+    read = reading.transform(outputs.copy(), dt)
+    np.testing.assert_array_equal(read[0, 1:], outputs[0, 1:])
+    steady = time > 2.0  # the start-up ring decays within 5 / (zeta w) = 0.2 s
+    response = 1.0 / (1.0 - (5.0 / f_n) ** 2 + 2j * zeta * 5.0 / f_n)
+    amplitude = np.ptp(read[0, 0, steady]) / np.ptp(signal[steady])
+    assert amplitude == pytest.approx(abs(response), rel=1e-3)  # 1.02 times larger
+    omega = 2 * np.pi * f_n
+    system = ([omega**2], [1.0, 2 * zeta * omega, omega**2])
+    _, continuous, _ = scipy.signal.lsim(system, signal, time, X0=None)
+    reference = np.asarray(continuous) + 0.0
+    # lsim starts from rest at zero: compare once both rings have died out
+    assert np.max(np.abs(read[0, 0, steady] - reference[steady])) < 2e-3 * np.ptp(signal)
+    constant = np.full((1, 3, 500), 7.0)
+    np.testing.assert_allclose(reading.transform(constant, dt), 7.0)

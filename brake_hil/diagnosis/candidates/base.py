@@ -168,6 +168,15 @@ class Candidate:
         """
         return {}
 
+    def rival_readings(self, theta: FloatArray) -> tuple[str, ...]:
+        """Channels this physics, fitted with ``theta``, only shifts in time (unit gain).
+
+        The reading check of ``physics_checks`` fits the same hypothesis with this member
+        replaced by each channel read through a mode of its own
+        (:class:`~.resonant_reading.ResonantReading`). Default: none.
+        """
+        return ()
+
     def start(self, context: Context) -> FloatArray:
         """Start values of the parameters (may use the rig's derived quantities)."""
         return np.array([p.start for p in self.parameters])

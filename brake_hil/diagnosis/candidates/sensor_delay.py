@@ -94,6 +94,20 @@ class SensorDelay(Candidate):
         skews = delays - np.median(delays)
         return {c: "resonance" for c, skew in zip(CHANNELS, skews) if abs(skew) > SKEW_THRESHOLD}
 
+    def rival_readings(self, theta: FloatArray) -> tuple[str, ...]:
+        """The most skewed channel, when skewed: a delay shifts it and leaves its gain alone.
+
+        A transducer read through a lightly damped tapping line lags at the pulsing's
+        frequency as well, and amplifies it by ``1 / (1 - (f / f_n)^2)``; a delay plus a
+        recalibrated plant mimics that gain only by bending the rig's values (a pressure tap
+        at 36 Hz came out as ``p_b`` 3.2 ms late, ``F_k`` and ``x_c`` 1.3 and 0.8 ms early,
+        the seal's damping doubled).
+        """
+        delays = np.asarray(theta[:3], dtype=float)
+        skews = np.abs(delays - np.median(delays))
+        most = int(np.argmax(skews))
+        return (CHANNELS[most],) if skews[most] > SKEW_THRESHOLD else ()
+
     def consistent(self, evidence: dict[str, float]) -> bool:
         """A channel lags by more than a millisecond."""
         return max(abs(evidence.get(f"lag_{c}_ms", 0.0)) for c in CHANNELS) > 1.0

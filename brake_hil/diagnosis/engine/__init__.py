@@ -11,7 +11,8 @@ parameter sets in one pass (one pass gives a whole finite-difference Jacobian):
   discrete modes; each step takes its entry), explicit inputs held over a step (exponential
   integrator), state updates after a step, and transforms of the outputs.
 * The mechanisms more than one effect uses are the engine's own (:mod:`.mechanisms`): a
-  switching Jenkins friction element between piston and caliper and a per-channel delay.
+  switching Jenkins friction element between piston and caliper, a per-channel delay, and a
+  channel read through a mode (the physics checks' rival of a delay).
 
 A candidate of :mod:`brake_hil.diagnosis.candidates` contributes terms; the engine knows no
 effect names.
@@ -20,7 +21,7 @@ effect names.
 from __future__ import annotations
 
 from brake_hil.diagnosis.engine.integrator import Integrator, simulate_batch
-from brake_hil.diagnosis.engine.mechanisms import ChannelDelay, FrictionElement
+from brake_hil.diagnosis.engine.mechanisms import ChannelDelay, ChannelReading, FrictionElement
 from brake_hil.diagnosis.engine.plant import CALIPER_FORCE, LINE_DROP, RELATIVE_FORCE, Coupling
 from brake_hil.diagnosis.engine.terms import Entry, ModelSpec, State, Step, Term
 
@@ -29,6 +30,7 @@ __all__ = [
     "LINE_DROP",
     "RELATIVE_FORCE",
     "ChannelDelay",
+    "ChannelReading",
     "Coupling",
     "Entry",
     "FrictionElement",

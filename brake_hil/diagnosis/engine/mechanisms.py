@@ -1,20 +1,22 @@
 """The engine's own mechanisms that more than a single law needs.
 
-A switching friction element between piston and caliper, and a per-channel delay of the
-outputs.
+A switching friction element between piston and caliper, a per-channel delay of the
+outputs, and one output read through a second-order mode.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+import math
 
 import numpy as np
+import scipy.signal
 
 from brake_hil.diagnosis.engine.plant import RELATIVE_FORCE, Coupling
 from brake_hil.diagnosis.engine.terms import Entry, State, Step, Term
 from brake_hil.types import FloatArray, IndexArray
 
-__all__ = ["ChannelDelay", "FrictionElement"]
+__all__ = ["ChannelDelay", "ChannelReading", "FrictionElement"]
 
 STUCK, SLIPPING = 0, 1
 
@@ -145,4 +147,38 @@ class ChannelDelay(Term):
                 delay = float(self.delays[b, channel])
                 if delay != 0.0:
                     outputs[b, channel] = np.interp(time - delay, time, outputs[b, channel])
+        return outputs
+
+
+@dataclass(frozen=True, eq=False)
+class ChannelReading(Term):
+    """One output channel read through ``w^2 / (s^2 + 2 zeta w s + w^2)`` (unit static gain).
+
+    A transducer behind a resonant tapping line or mount. Tustin-discretised with the
+    frequency prewarped, started at rest at the run's first value.
+    """
+
+    channel: int  # 0 p_b, 1 F_k, 2 x_c
+    frequency: FloatArray  # (B,) natural frequency f_n, Hz
+    damping_ratio: FloatArray  # (B,) zeta, -
+
+    linear = True
+
+    def transform(self, outputs: FloatArray, sample_time: float) -> FloatArray:
+        """Filter the channel of every set."""
+        k = 2.0 / sample_time  # Tustin: s = k (1 - 1/z) / (1 + 1/z)
+        for b in range(outputs.shape[0]):
+            frequency = min(float(self.frequency[b]), 0.45 / sample_time)
+            omega = k * math.tan(math.pi * frequency * sample_time)  # prewarped, rad/s
+            damping = 2.0 * float(self.damping_ratio[b]) * omega * k
+            a0 = k * k + damping + omega * omega
+            numerator = np.array([1.0, 2.0, 1.0]) * omega * omega / a0
+            denominator = np.array(
+                [1.0, 2.0 * (omega * omega - k * k) / a0, (k * k - damping + omega * omega) / a0]
+            )
+            signal = outputs[b, self.channel]
+            start = scipy.signal.lfilter_zi(numerator, denominator) * signal[0]
+            outputs[b, self.channel] = scipy.signal.lfilter(
+                numerator, denominator, signal, zi=start
+            )[0]
         return outputs
