@@ -16,12 +16,11 @@ of the summary and is in the decision itself, for every hypothesis:
 * **Leftover** (:func:`leftover_check`): what it leaves on a channel is not a generic form
   its physics leaves no room for (``Candidate.leaves_no``: a delayed channel does not ring),
   cutting that channel's held-out error ``LEFTOVER_RATIO`` times.
-* **Reading** (:func:`reading_check`): a channel its physics only shifts in time
-  (``Candidate.rival_readings``) does not read better through a lightly damped mode of its
-  own: the same hypothesis with that member replaced by
-  :class:`~.candidates.resonant_reading.ResonantReading`, calibration refitted, fits no
-  better with a damping ratio under ``LIGHT_DAMPING`` (a delay does not amplify; a resonant
-  tapping line does).
+* **Rivals** (:func:`rival_check`): physics outside the library that this one may stand in
+  for (``Candidate.rivals``: a delayed channel may be read through a resonant tap, a hose's lag
+  may be a late ``p_i``), fitted in its place with the calibration refitted, either does not
+  come out as its own physics (``Rival.holds``) or leaves ``Rival.told_apart`` times more
+  held-out error than the hypothesis.
 * **Wider priors** (:func:`prior_check`): with the calibration's priors ``PRIOR_WIDENING``
   times wider (the rig's values freer than its tolerances say), and ``FREED_WIDENING`` times
   wider for the values this recording cannot identify (the Fisher information of the
@@ -43,7 +42,6 @@ import numpy as np
 
 from brake_hil.diagnosis.calibration import Calibration
 from brake_hil.diagnosis.candidates import candidate, own_columns
-from brake_hil.diagnosis.candidates.resonant_reading import ResonantReading
 from brake_hil.diagnosis.dataset import Dataset
 from brake_hil.diagnosis.fitting import Fit, Model, fit
 from brake_hil.diagnosis.residual_forms import FORMS, baseline_predictions, describe_residual
@@ -55,7 +53,6 @@ __all__ = [
     "FREED_WIDENING",
     "IDENTIFIABLE_SHARE",
     "LEFTOVER_RATIO",
-    "LIGHT_DAMPING",
     "PRIOR_WIDENING",
     "SEGMENT_SIGMAS",
     "SEGMENT_TOLERANCE",
@@ -65,7 +62,7 @@ __all__ = [
     "check_hypothesis",
     "leftover_check",
     "prior_check",
-    "reading_check",
+    "rival_check",
     "segment_check",
     "unidentified",
 ]
@@ -76,13 +73,6 @@ LEFTOVER_RATIO = 2.0
 2026-11-26: a resonance on what a true sensor delay leaves on its skewed channel 0.91-1.10
 (15 recordings of both families); on a pressure tap's resonance named ``sensor_delay``
 1.46-7.9."""
-LIGHT_DAMPING = 0.4
-"""A channel that reads at least as well through a mode damped less than this as the
-hypothesis makes it read is a resonant reading, not a delayed one. Measured 2026-11-26 on
-family b's seed 901 (the mode fitted with the calibration refitted): six pressure taps
-0.06-0.19 at 18-42 Hz (each within 0.1 of its drawn damping, its frequency within 1 Hz),
-reading 1.7-15 times better than delayed; eleven true delays of both families 0.68-0.79
-(a delay's nearest mode is a Butterworth filter's, 0.71), reading as well as delayed."""
 UNREACHED_SHARE = 0.8
 """Share of the removed error on channels the effect does not reach that marks a stand-in."""
 SEGMENT_SIGMAS = 4.0
@@ -112,7 +102,7 @@ SEGMENT_ITERATIONS = 8
 class CheckOutcome:
     """One check's result: passed, and what it found in words."""
 
-    name: str  # channels, leftover, reading, segments or wider_priors
+    name: str  # channels, leftover, rivals, segments or wider_priors
     passed: bool
     finding: str
 
@@ -220,37 +210,33 @@ def leftover_check(model: Model, hypothesis: Fit) -> CheckOutcome:
     return CheckOutcome("leftover", True, f"no {shown} in what it leaves")
 
 
-def reading_check(model: Model, hypothesis: Fit) -> CheckOutcome:
-    """A channel it only shifts in time does not read better through a lightly damped mode."""
+def rival_check(model: Model, hypothesis: Fit) -> CheckOutcome:
+    """No rival physics, fitted in a member's place, is its own and explains about as well."""
     members = list(model.candidates)
-    nearest: list[str] = []
+    told: list[str] = []
+    column = 0
     for index, (member, own) in enumerate(own_columns(members, hypothesis.theta)):
-        for channel in member.rival_readings(own):
-            replaced = [
-                ResonantReading(channel) if k == index else m for k, m in enumerate(members)
-            ]
+        for rival in member.rivals(own):
+            replaced = [rival if k == index else m for k, m in enumerate(members)]
             try:
-                rival = fit(Model(model.calibration, replaced, model.dataset))
+                fitted = fit(Model(model.calibration, replaced, model.dataset))
             except FitError:
                 continue
-            column = sum(len(m.parameters) for m in members[:index])
-            frequency, damping = (float(v) for v in rival.theta[column : column + 2])
-            better = hypothesis.held_out_cost / max(rival.held_out_cost, 1e-300)
-            mode = f"{frequency:.0f} Hz, damping ratio {damping:.2f}"
-            if damping < LIGHT_DAMPING and better >= 1.0:
+            values = fitted.theta[column : column + len(rival.parameters)]
+            apart = fitted.held_out_cost / max(hypothesis.held_out_cost, 1e-300)
+            if rival.holds(values) and apart < rival.told_apart:
                 return CheckOutcome(
-                    "reading",
+                    "rivals",
                     False,
-                    f"{channel} reads through a lightly damped mode ({mode}) {better:.1f} times "
-                    f"better than {member.name} makes it read: a delay does not amplify, a "
-                    f"resonant tapping line or mount does",
+                    f"{rival.in_words(values)} explains it as well: its held-out error is "
+                    f"{apart:.2f} times {member.name}'s, which must be {rival.told_apart:g} "
+                    f"times lower to tell them apart; {rival.why}",
                 )
-            nearest.append(f"{channel} (nearest mode: {mode}, {better:.2f} times)")
-    if not nearest:
-        return CheckOutcome("reading", True, "no channel its physics only shifts in time")
-    return CheckOutcome(
-        "reading", True, f"no better read through a lightly damped mode: {', '.join(nearest)}"
-    )
+            told.append(f"{rival.in_words(values)}, held-out error {apart:.2f} times its own")
+        column += len(member.parameters)
+    if not told:
+        return CheckOutcome("rivals", True, "no rival its physics could stand in for")
+    return CheckOutcome("rivals", True, f"told from its rivals: {'; '.join(told)}")
 
 
 def prior_check(
@@ -339,7 +325,7 @@ def check_hypothesis(
     if outcomes[-1].passed:
         outcomes.append(leftover_check(model, hypothesis))
     if outcomes[-1].passed:
-        outcomes.append(reading_check(model, hypothesis))
+        outcomes.append(rival_check(model, hypothesis))
     if outcomes[-1].passed:
         outcomes.append(segment_check(model, hypothesis))
     if outcomes[-1].passed:

@@ -138,11 +138,11 @@ def test_a_tap_that_rings_too_little_to_show_is_read_through_its_mode(tmp_path: 
     """A subtle pressure tap (case 24 of ``brake-hil cases --family b --seed 901``: p_b read
     through a 36 Hz mode, damping 0.12) leaves nothing the leftover check sees once p_b is
     delayed 3.2 ms (and the seal's damping doubled to match its 2 % gain); named
-    ``sensor_delay`` at 0.78 before the reading check. Read through a mode of its own, with
+    ``sensor_delay`` at 0.78 before the rival check. Read through a mode of its own, with
     the calibration refitted, p_b fits better at the tap's frequency and damping, and the
     delay is set aside. A true delay of p_b (case 7: a Butterworth chain, 3.4 ms) reads as
     well through a well-damped mode only, and is still named."""
-    from brake_hil.diagnosis.physics_checks import LIGHT_DAMPING
+    from brake_hil.diagnosis.candidates.resonant_reading import LIGHT_DAMPING
     from brake_hil.virtual_rig.cases import make_case, plan_cases
 
     def diagnosed(number: int, effect: str) -> Diagnosis:
@@ -154,12 +154,39 @@ def test_a_tap_that_rings_too_little_to_show_is_read_through_its_mode(tmp_path: 
 
     tap = diagnosed(24, "pressure_tap_resonance")
     assert "sensor_delay" not in tap.effects, tap.explanation
-    reading = [c for c in tap.checks["sensor_delay"] if c.name == "reading"]
+    reading = [c for c in tap.checks["sensor_delay"] if c.name == "rivals"]
     assert reading and not reading[0].passed, tap.checks
     found = re.search(r"mode \((\d+) Hz, damping ratio ([\d.]+)\)", reading[0].finding)
     assert found is not None, reading[0].finding
     assert 30 <= int(found[1]) <= 42 and float(found[2]) < LIGHT_DAMPING  # drawn: 35.6, 0.117
     delay = diagnosed(7, "sensor_delay")
     assert delay.effects == ("sensor_delay",), delay.explanation
-    reading = [c for c in delay.checks["sensor_delay"] if c.name == "reading"]
+    reading = [c for c in delay.checks["sensor_delay"] if c.name == "rivals"]
     assert reading and reading[0].passed and "p_b" in reading[0].finding, delay.checks
+
+
+def test_a_late_master_cylinder_pressure_is_not_named_a_hose(tmp_path: Path) -> None:
+    """A ``p_i`` acquired 4 ms late (case 14 of ``brake-hil cases --family a --seed 901``: a
+    pure delay and a first-order filter) makes every output lead the prediction alike; a
+    creeping hose with a calibration of less lag of its own fitted it better than a pure delay
+    did, and it was named ``hose_compliance`` at 0.92. Fitted in the hose's place, every
+    output led alike explains it as well: the hose is set aside (a hose adds lag, it cannot
+    make the outputs lead). A true hose (case 3) leaves a late ``p_i`` no room and is still
+    named."""
+    from brake_hil.virtual_rig.cases import make_case, plan_cases
+
+    def diagnosed(number: int, effect: str) -> Diagnosis:
+        spec = plan_cases(number + 1, 901, family="a")[number]
+        assert [e.name for e in spec.effects] == [effect]
+        make_case(spec, tmp_path, pulsing_s=5.0)
+        folder = tmp_path / spec.case_id
+        return diagnose(read_recording(folder / "recording"), load_rig(folder / "rig.yaml"))
+
+    late = diagnosed(14, "sensor_delay")
+    assert "hose_compliance" not in late.effects, late.explanation
+    rivals = [c for c in late.checks["hose_compliance"] if c.name == "rivals"]
+    assert rivals and not rivals[0].passed and "p_i acquired" in rivals[0].finding, late.checks
+    hose = diagnosed(3, "hose_compliance")
+    assert hose.effects == ("hose_compliance",), hose.explanation
+    rivals = [c for c in hose.checks["hose_compliance"] if c.name == "rivals"]
+    assert rivals and rivals[0].passed, hose.checks

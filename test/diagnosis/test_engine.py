@@ -164,3 +164,30 @@ def test_a_reading_through_a_mode_keeps_the_static_value_and_amplifies_below_it(
     assert np.max(np.abs(read[0, 0, steady] - reference[steady])) < 2e-3 * np.ptp(signal)
     constant = np.full((1, 3, 500), 7.0)
     np.testing.assert_allclose(reading.transform(constant, dt), 7.0)
+
+
+def test_leading_every_output_undoes_an_input_acquired_late_through_its_filter() -> None:
+    """``LeadingOutputs``: a model driven by a ``p_i`` read 3 ms late through a 1 ms first-order
+    filter predicts every output late; advanced 3 ms and led 1 ms, the prediction is back on
+    time within 1 % of its swing at 5 Hz (from 5.6 % off), nearer than advanced alone."""
+    import scipy.signal
+
+    from brake_hil.diagnosis.engine import LeadingOutputs
+
+    dt, late, filter_time = 1e-3, 3e-3, 1e-3
+    time = np.arange(0.0, 3.0, dt)
+    on_time = 2.0e6 + 1.0e6 * np.sin(2 * np.pi * 5.0 * time)
+    delayed = np.interp(time - late, time, on_time)
+    pole = np.exp(-dt / filter_time)
+    read = scipy.signal.lfilter([1 - pole], [1, -pole], delayed, zi=[pole * delayed[0]])[0]
+    outputs = np.stack([read, read, read])[None].copy()
+    led = LeadingOutputs(np.array([late]), np.array([filter_time])).transform(outputs.copy(), dt)
+    inside = (time > 0.5) & (time < 2.9)  # the filter settled; the last 3 ms hold their value
+    swing = np.ptp(on_time)
+    assert np.max(np.abs(read[inside] - on_time[inside])) > 0.05 * swing
+    for channel in range(3):
+        assert np.max(np.abs(led[0, channel, inside] - on_time[inside])) < 0.01 * swing
+    advanced = LeadingOutputs(np.array([late]), np.array([0.0])).transform(outputs.copy(), dt)
+    assert np.max(np.abs(advanced[0, 0, inside] - on_time[inside])) > np.max(
+        np.abs(led[0, 0, inside] - on_time[inside])
+    )

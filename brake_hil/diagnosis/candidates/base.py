@@ -168,12 +168,11 @@ class Candidate:
         """
         return {}
 
-    def rival_readings(self, theta: FloatArray) -> tuple[str, ...]:
-        """Channels this physics, fitted with ``theta``, only shifts in time (unit gain).
+    def rivals(self, theta: FloatArray) -> tuple[Rival, ...]:
+        """Physics outside the library that this one, fitted with ``theta``, may stand in for.
 
-        The reading check of ``physics_checks`` fits the same hypothesis with this member
-        replaced by each channel read through a mode of its own
-        (:class:`~.resonant_reading.ResonantReading`). Default: none.
+        The rival check of ``physics_checks`` fits the same hypothesis with this member
+        replaced by each rival, calibration refitted. Default: none.
         """
         return ()
 
@@ -185,6 +184,27 @@ class Candidate:
     def describe(cls) -> str:
         """The physical description: the class docstring's first paragraphs, one line."""
         return " ".join((cls.__doc__ or "").split())
+
+
+class Rival(Candidate):
+    """Physics outside the library that mimics a candidate's (never named, not registered).
+
+    Fitted in the candidate's place, it says whether its fitted values are its own physics
+    (:meth:`holds`); when they are, the candidate must leave ``told_apart`` times less
+    held-out error than it to be told from it (:func:`..physics_checks.rival_check`).
+    """
+
+    told_apart: ClassVar[float] = 1.0
+    why: ClassVar[str] = ""
+    """What the candidate's physics cannot do and the rival's does, in words."""
+
+    def holds(self, theta: FloatArray) -> bool:
+        """Whether its fitted own parameters ``theta`` describe the rival's physics."""
+        return True
+
+    def in_words(self, theta: FloatArray) -> str:
+        """Its fitted own parameters, read physically."""
+        return ", ".join(f"{p.name} {v:.3g} {p.unit}" for p, v in zip(self.parameters, theta))
 
 
 def own_columns(

@@ -2,20 +2,27 @@
 
 Not in the library and never named: no catalogue entry of interface.md describes it, so it is
 not registered. The physics checks fit it, with the calibration refitted, as the rival of an
-effect that only shifts a channel in time (``Candidate.rival_readings``): a transducer behind
-a resonant tapping line lags at the pulsing's frequency too, but it also amplifies, and a
+effect that only shifts a channel in time (``SensorDelay.rivals``): a transducer behind a
+resonant tapping line lags at the pulsing's frequency too, but it also amplifies, and a
 delay plus a recalibrated plant can mimic a few per cent of gain only by bending the rig's
-values. When the channel reads better through a lightly damped mode than it does delayed,
-the delay is a stand-in.
+values. When the channel reads at least as well through a mode damped under
+``LIGHT_DAMPING``, the delay is a stand-in.
 """
 
 from __future__ import annotations
 
-from brake_hil.diagnosis.candidates.base import Candidate, CandidateParameter, Context, Draft
+from brake_hil.diagnosis.candidates.base import CandidateParameter, Context, Draft, Rival
 from brake_hil.diagnosis.engine import ChannelReading
 from brake_hil.physics.catalogue import EffectEntry, Quantity
 from brake_hil.topics import OUTPUT_CHANNELS
 from brake_hil.types import FloatArray
+
+LIGHT_DAMPING = 0.4
+"""A mode damped less than this is a resonance, not a filter. Measured 2026-11-26 on seed 901
+(the mode fitted in a delay's place, the calibration refitted): family b's seven pressure taps
+came out at 0.06-0.20 and 18-43 Hz (each within 0.02 and 1 Hz of its drawn values), reading
+1.5-15 times better than delayed; fifteen true delays of both families at 0.55-0.88 (a
+delay's nearest mode is a Butterworth filter's, 0.71), reading 0.7-1.2 times as well."""
 
 READING = EffectEntry(
     name="resonant_reading",
@@ -39,10 +46,12 @@ READING = EffectEntry(
 )
 
 
-class ResonantReading(Candidate):
+class ResonantReading(Rival):
     """One output channel read through a second-order mode of its own (unit static gain)."""
 
     entry = READING
+    told_apart = 1.0  # a delay must read the channel better than the mode does
+    why = "a delay does not amplify, a resonant tapping line or mount does"
     parameters = (
         CandidateParameter("reading_frequency", "Hz", 10.0, 300.0, 40.0, logarithmic=True),
         CandidateParameter("reading_damping_ratio", "-", 0.02, 1.5, 0.3, logarithmic=True),
@@ -50,6 +59,15 @@ class ResonantReading(Candidate):
 
     def __init__(self, channel: str) -> None:
         self.channel = channel
+
+    def holds(self, theta: FloatArray) -> bool:
+        """A lightly damped mode (under ``LIGHT_DAMPING``): a resonance, not a filter."""
+        return float(theta[1]) < LIGHT_DAMPING
+
+    def in_words(self, theta: FloatArray) -> str:
+        """``p_b read through a mode (35 Hz, damping ratio 0.10)``."""
+        mode = f"{theta[0]:.0f} Hz, damping ratio {theta[1]:.2f}"
+        return f"{self.channel} read through a mode ({mode})"
 
     def fill(self, draft: Draft, theta: FloatArray, context: Context) -> None:
         """Read the channel through the mode."""

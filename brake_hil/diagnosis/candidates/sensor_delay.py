@@ -9,7 +9,9 @@ from brake_hil.diagnosis.candidates.base import (
     CandidateParameter,
     Context,
     Draft,
+    Rival,
 )
+from brake_hil.diagnosis.candidates.resonant_reading import ResonantReading
 from brake_hil.diagnosis.engine import ChannelDelay
 from brake_hil.physics.catalogue import CATALOGUE
 from brake_hil.types import FloatArray
@@ -94,19 +96,19 @@ class SensorDelay(Candidate):
         skews = delays - np.median(delays)
         return {c: "resonance" for c, skew in zip(CHANNELS, skews) if abs(skew) > SKEW_THRESHOLD}
 
-    def rival_readings(self, theta: FloatArray) -> tuple[str, ...]:
-        """The most skewed channel, when skewed: a delay shifts it and leaves its gain alone.
+    def rivals(self, theta: FloatArray) -> tuple[Rival, ...]:
+        """The most skewed channel, when skewed, read through a mode of its own.
 
-        A transducer read through a lightly damped tapping line lags at the pulsing's
-        frequency as well, and amplifies it by ``1 / (1 - (f / f_n)^2)``; a delay plus a
-        recalibrated plant mimics that gain only by bending the rig's values (a pressure tap
-        at 36 Hz came out as ``p_b`` 3.2 ms late, ``F_k`` and ``x_c`` 1.3 and 0.8 ms early,
-        the seal's damping doubled).
+        A transducer behind a lightly damped tapping line lags at the pulsing's frequency as
+        well, and amplifies it by ``1 / (1 - (f / f_n)^2)``; a delay plus a recalibrated
+        plant mimics that gain only by bending the rig's values (a pressure tap at 36 Hz came
+        out as ``p_b`` 3.2 ms late, ``F_k`` and ``x_c`` 1.3 and 0.8 ms early, the seal's
+        damping doubled).
         """
         delays = np.asarray(theta[:3], dtype=float)
         skews = np.abs(delays - np.median(delays))
         most = int(np.argmax(skews))
-        return (CHANNELS[most],) if skews[most] > SKEW_THRESHOLD else ()
+        return (ResonantReading(CHANNELS[most]),) if skews[most] > SKEW_THRESHOLD else ()
 
     def consistent(self, evidence: dict[str, float]) -> bool:
         """A channel lags by more than a millisecond."""

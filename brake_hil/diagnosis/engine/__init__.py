@@ -11,8 +11,8 @@ parameter sets in one pass (one pass gives a whole finite-difference Jacobian):
   discrete modes; each step takes its entry), explicit inputs held over a step (exponential
   integrator), state updates after a step, and transforms of the outputs.
 * The mechanisms more than one effect uses are the engine's own (:mod:`.mechanisms`): a
-  switching Jenkins friction element between piston and caliper, a per-channel delay, and a
-  channel read through a mode (the physics checks' rival of a delay).
+  switching Jenkins friction element between piston and caliper, a per-channel delay; and,
+  for the physics checks' rivals, a channel read through a mode and every output led alike.
 
 A candidate of :mod:`brake_hil.diagnosis.candidates` contributes terms; the engine knows no
 effect names.
@@ -21,7 +21,12 @@ effect names.
 from __future__ import annotations
 
 from brake_hil.diagnosis.engine.integrator import Integrator, simulate_batch
-from brake_hil.diagnosis.engine.mechanisms import ChannelDelay, ChannelReading, FrictionElement
+from brake_hil.diagnosis.engine.mechanisms import (
+    ChannelDelay,
+    ChannelReading,
+    FrictionElement,
+    LeadingOutputs,
+)
 from brake_hil.diagnosis.engine.plant import CALIPER_FORCE, LINE_DROP, RELATIVE_FORCE, Coupling
 from brake_hil.diagnosis.engine.terms import Entry, ModelSpec, State, Step, Term
 
@@ -35,6 +40,7 @@ __all__ = [
     "Entry",
     "FrictionElement",
     "Integrator",
+    "LeadingOutputs",
     "ModelSpec",
     "State",
     "Step",

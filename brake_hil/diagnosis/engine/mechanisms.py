@@ -1,7 +1,8 @@
 """The engine's own mechanisms that more than a single law needs.
 
 A switching friction element between piston and caliper, a per-channel delay of the
-outputs, and one output read through a second-order mode.
+outputs, one output read through a second-order mode, and every output led alike (an input
+acquired late through its filter).
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from brake_hil.diagnosis.engine.plant import RELATIVE_FORCE, Coupling
 from brake_hil.diagnosis.engine.terms import Entry, State, Step, Term
 from brake_hil.types import FloatArray, IndexArray
 
-__all__ = ["ChannelDelay", "ChannelReading", "FrictionElement"]
+__all__ = ["ChannelDelay", "ChannelReading", "FrictionElement", "LeadingOutputs"]
 
 STUCK, SLIPPING = 0, 1
 
@@ -181,4 +182,28 @@ class ChannelReading(Term):
             outputs[b, self.channel] = scipy.signal.lfilter(
                 numerator, denominator, signal, zi=start
             )[0]
+        return outputs
+
+
+@dataclass(frozen=True, eq=False)
+class LeadingOutputs(Term):
+    """Every output advanced by ``advance`` and led by ``lead``: ``y(t) = u(t + a) + T u'(t + a)``.
+
+    What the model predicts from an input ``p_i`` acquired ``a`` late through a first-order
+    filter of time constant ``T`` (the filter inverted to first order). The last ``a`` of a
+    run holds its final value.
+    """
+
+    advance: FloatArray  # (B,) a, s
+    lead: FloatArray  # (B,) T, s
+
+    linear = True
+
+    def transform(self, outputs: FloatArray, sample_time: float) -> FloatArray:
+        """Advance and lead every channel of every set."""
+        time = np.arange(outputs.shape[-1]) * sample_time
+        for b in range(outputs.shape[0]):
+            for channel in range(outputs.shape[1]):
+                early = np.interp(time + float(self.advance[b]), time, outputs[b, channel])
+                outputs[b, channel] = early + float(self.lead[b]) * np.gradient(early, sample_time)
         return outputs
