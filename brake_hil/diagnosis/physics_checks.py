@@ -225,12 +225,13 @@ def rival_check(model: Model, hypothesis: Fit) -> CheckOutcome:
             values = fitted.theta[column : column + len(rival.parameters)]
             apart = fitted.held_out_cost / max(hypothesis.held_out_cost, 1e-300)
             if rival.holds(values) and apart < rival.told_apart:
+                lower = "" if rival.told_apart == 1.0 else f"{rival.told_apart:g} times "
                 return CheckOutcome(
                     "rivals",
                     False,
                     f"{rival.in_words(values)} explains it as well: its held-out error is "
-                    f"{apart:.2f} times {member.name}'s, which must be {rival.told_apart:g} "
-                    f"times lower to tell them apart; {rival.why}",
+                    f"{apart:.2f} times {member.name}'s, which would have to be {lower}lower "
+                    f"to tell them apart; {rival.why}",
                 )
             told.append(f"{rival.in_words(values)}, held-out error {apart:.2f} times its own")
         column += len(member.parameters)

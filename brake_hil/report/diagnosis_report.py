@@ -517,8 +517,10 @@ def _checks_table(diagnosis: Diagnosis) -> str:
         "<p>Before a hypothesis is named it must explain the misfit clearly better than a "
         "generic form of it does (the decision's rule), and behave as its physics: the error "
         "it removes is on channels its physics reaches, what it leaves is no form its physics "
-        "rules out (a delayed channel does not ring), its parameters agree segment by "
-        "segment, and it survives wider priors on the rig's values.</p>"
+        "rules out (a delayed channel does not ring), no rival physics outside the library "
+        "explains it as well when fitted in its place (a resonant tap for a delay, a late "
+        "p_i for a hose), its parameters agree segment by segment, and it survives wider "
+        "priors on the rig's values.</p>"
         "<table><tr><th>hypothesis</th><th>check</th><th>result</th>"
         "<th>what was found</th></tr>" + rows + "</table>"
     )

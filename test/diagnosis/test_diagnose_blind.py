@@ -86,19 +86,25 @@ def test_an_unexplained_misfit_is_described_by_its_generic_form(case_set: Path) 
     json.dumps(document)  # plain JSON
 
 
+def _planned_case(tmp_path: Path, family: str, seed: int, number: int, effect: str) -> Diagnosis:
+    """Case ``number`` of ``brake-hil cases --family FAMILY --seed SEED`` (its one effect
+    ``effect``, checked), made at 5 s per segment and diagnosed."""
+    from brake_hil.virtual_rig.cases import make_case, plan_cases
+
+    spec = plan_cases(number + 1, seed, family=family)[number]
+    assert [e.name for e in spec.effects] == [effect]
+    make_case(spec, tmp_path, pulsing_s=5.0)
+    folder = tmp_path / spec.case_id
+    return diagnose(read_recording(folder / "recording"), load_rig(folder / "rig.yaml"))
+
+
 def test_a_load_cells_hysteresis_is_not_named_a_sensor_delay(tmp_path: Path) -> None:
     """Family b's load-cell hysteresis (out of the library) fits as a delay of a few tenths of
     a millisecond, but one that shrinks as the amplitude grows, and what it leaves rings: a
     physics check sets the delay aside (a delay is a time) and the verdict does not name it
     (case 24 of
     ``brake-hil cases --family b --seed 701``, named sensor_delay at 0.74 before the check)."""
-    from brake_hil.virtual_rig.cases import make_case, plan_cases
-
-    spec = plan_cases(25, 701, family="b")[24]
-    assert [e.name for e in spec.effects] == ["force_sensor_hysteresis"]
-    make_case(spec, tmp_path, pulsing_s=5.0)
-    folder = tmp_path / spec.case_id
-    result = diagnose(read_recording(folder / "recording"), load_rig(folder / "rig.yaml"))
+    result = _planned_case(tmp_path, "b", 701, 24, "force_sensor_hysteresis")
     assert "sensor_delay" not in result.effects, result.explanation
     findings = [c.finding for c in result.checks.get("sensor_delay", []) if not c.passed]
     # set aside by the leftover check (what the delay leaves on F_k rings), or, were that
@@ -115,20 +121,11 @@ def test_a_resonant_pressure_tap_is_not_named_a_sensor_delay(tmp_path: Path) -> 
     on p_b rings, and the leftover check sets it aside (case 51 of ``brake-hil cases
     --family b --seed 702``, named sensor_delay at 0.66 before the check). A true delay of
     x_c (case 1 of seed 703) leaves no ring and is still named."""
-    from brake_hil.virtual_rig.cases import make_case, plan_cases
-
-    def diagnosed(seed: int, number: int, effect: str) -> Diagnosis:
-        spec = plan_cases(number + 1, seed, family="b")[number]
-        assert [e.name for e in spec.effects] == [effect]
-        make_case(spec, tmp_path, pulsing_s=5.0)
-        folder = tmp_path / spec.case_id
-        return diagnose(read_recording(folder / "recording"), load_rig(folder / "rig.yaml"))
-
-    tap = diagnosed(702, 51, "pressure_tap_resonance")
+    tap = _planned_case(tmp_path, "b", 702, 51, "pressure_tap_resonance")
     assert "sensor_delay" not in tap.effects, tap.explanation
     findings = [c.finding for c in tap.checks.get("sensor_delay", []) if not c.passed]
     assert any("what it leaves on p_b is a resonance" in f for f in findings), tap.checks
-    delay = diagnosed(703, 1, "sensor_delay")
+    delay = _planned_case(tmp_path, "b", 703, 1, "sensor_delay")
     assert delay.effects == ("sensor_delay",), delay.explanation
     leftover = [c for c in delay.checks["sensor_delay"] if c.name == "leftover"]
     assert leftover and leftover[0].passed and "x_c" in leftover[0].finding
@@ -143,23 +140,15 @@ def test_a_tap_that_rings_too_little_to_show_is_read_through_its_mode(tmp_path: 
     delay is set aside. A true delay of p_b (case 7: a Butterworth chain, 3.4 ms) reads as
     well through a well-damped mode only, and is still named."""
     from brake_hil.diagnosis.candidates.resonant_reading import LIGHT_DAMPING
-    from brake_hil.virtual_rig.cases import make_case, plan_cases
 
-    def diagnosed(number: int, effect: str) -> Diagnosis:
-        spec = plan_cases(number + 1, 901, family="b")[number]
-        assert [e.name for e in spec.effects] == [effect]
-        make_case(spec, tmp_path, pulsing_s=5.0)
-        folder = tmp_path / spec.case_id
-        return diagnose(read_recording(folder / "recording"), load_rig(folder / "rig.yaml"))
-
-    tap = diagnosed(24, "pressure_tap_resonance")
+    tap = _planned_case(tmp_path, "b", 901, 24, "pressure_tap_resonance")
     assert "sensor_delay" not in tap.effects, tap.explanation
     reading = [c for c in tap.checks["sensor_delay"] if c.name == "rivals"]
     assert reading and not reading[0].passed, tap.checks
     found = re.search(r"mode \((\d+) Hz, damping ratio ([\d.]+)\)", reading[0].finding)
     assert found is not None, reading[0].finding
     assert 30 <= int(found[1]) <= 42 and float(found[2]) < LIGHT_DAMPING  # drawn: 35.6, 0.117
-    delay = diagnosed(7, "sensor_delay")
+    delay = _planned_case(tmp_path, "b", 901, 7, "sensor_delay")
     assert delay.effects == ("sensor_delay",), delay.explanation
     reading = [c for c in delay.checks["sensor_delay"] if c.name == "rivals"]
     assert reading and reading[0].passed and "p_b" in reading[0].finding, delay.checks
@@ -173,20 +162,11 @@ def test_a_late_master_cylinder_pressure_is_not_named_a_hose(tmp_path: Path) -> 
     output led alike explains it as well: the hose is set aside (a hose adds lag, it cannot
     make the outputs lead). A true hose (case 3) leaves a late ``p_i`` no room and is still
     named."""
-    from brake_hil.virtual_rig.cases import make_case, plan_cases
-
-    def diagnosed(number: int, effect: str) -> Diagnosis:
-        spec = plan_cases(number + 1, 901, family="a")[number]
-        assert [e.name for e in spec.effects] == [effect]
-        make_case(spec, tmp_path, pulsing_s=5.0)
-        folder = tmp_path / spec.case_id
-        return diagnose(read_recording(folder / "recording"), load_rig(folder / "rig.yaml"))
-
-    late = diagnosed(14, "sensor_delay")
+    late = _planned_case(tmp_path, "a", 901, 14, "sensor_delay")
     assert "hose_compliance" not in late.effects, late.explanation
     rivals = [c for c in late.checks["hose_compliance"] if c.name == "rivals"]
     assert rivals and not rivals[0].passed and "p_i acquired" in rivals[0].finding, late.checks
-    hose = diagnosed(3, "hose_compliance")
+    hose = _planned_case(tmp_path, "a", 901, 3, "hose_compliance")
     assert hose.effects == ("hose_compliance",), hose.explanation
     rivals = [c for c in hose.checks["hose_compliance"] if c.name == "rivals"]
     assert rivals and rivals[0].passed, hose.checks
