@@ -45,7 +45,7 @@ setup(
         "dev": [
             "pytest>=7",
             "hypothesis>=6",
-            "ruff>=0.5",
+            "ruff>=0.17,<0.18",  # its lint rules and format style move between minor versions
             "mypy>=1.8",
             "types-PyYAML",
             # a private PostgreSQL server for the results database's tests (its binaries bundled)
