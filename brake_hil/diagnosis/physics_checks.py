@@ -233,7 +233,11 @@ def rival_check(model: Model, hypothesis: Fit) -> CheckOutcome:
                     f"{apart:.2f} times {member.name}'s, which would have to be {lower}lower "
                     f"to tell them apart; {rival.why}",
                 )
-            told.append(f"{rival.in_words(values)}, held-out error {apart:.2f} times its own")
+            unlike = "" if rival.holds(values) else f", {rival.unlike}"
+            told.append(
+                f"{rival.in_words(values)}{unlike}: held-out error {apart:.2f} times "
+                f"{member.name}'s"
+            )
         column += len(member.parameters)
     if not told:
         return CheckOutcome("rivals", True, "no rival its physics could stand in for")

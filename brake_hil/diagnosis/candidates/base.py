@@ -197,6 +197,8 @@ class Rival(Candidate):
     told_apart: ClassVar[float] = 1.0
     why: ClassVar[str] = ""
     """What the candidate's physics cannot do and the rival's does, in words."""
+    unlike: ClassVar[str] = "not that physics"
+    """What its fitted values say when they are not its physics (:meth:`holds`), in words."""
 
     def holds(self, theta: FloatArray) -> bool:
         """Whether its fitted own parameters ``theta`` describe the rival's physics."""

@@ -49,6 +49,7 @@ class LateInput(Rival):
     )
     told_apart = 2.0  # what a candidate must cut the baseline's error by (ACCEPT_RATIO)
     why = "a hose adds lag to every output, it cannot make them lead"
+    unlike = "too short a lead for a late input"
 
     def holds(self, theta: FloatArray) -> bool:
         """A lead of at least ``SHORTEST_LEAD`` in all."""

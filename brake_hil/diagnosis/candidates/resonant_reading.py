@@ -52,6 +52,7 @@ class ResonantReading(Rival):
     entry = READING
     told_apart = 1.0  # a delay must read the channel better than the mode does
     why = "a delay does not amplify, a resonant tapping line or mount does"
+    unlike = "damped as a filter is, not a resonance"
     parameters = (
         CandidateParameter("reading_frequency", "Hz", 10.0, 300.0, 40.0, logarithmic=True),
         CandidateParameter("reading_damping_ratio", "-", 0.02, 1.5, 0.3, logarithmic=True),
