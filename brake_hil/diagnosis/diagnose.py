@@ -332,6 +332,8 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         )
     if verdict.effects == ("unexplained",):
         explanation += f" {residual.summary[0].upper()}{residual.summary[1:]}."
+    else:  # the description is of the baseline's misfit, which the verdict explains or not
+        residual = residual.reworded("the calibrated LTI baseline's misfit")
     return Diagnosis(
         recording=str(recording.path),
         effects=verdict.effects,

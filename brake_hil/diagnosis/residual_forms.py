@@ -61,7 +61,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import math
 from typing import ClassVar, Protocol
 
@@ -887,6 +887,16 @@ class ResidualDescription:
         """The misfit drifts in time within the segments."""
         return self.misfit().drifts
 
+    def reworded(self, verdict: str) -> ResidualDescription:
+        """The same description, its summary starting with ``verdict``.
+
+        On a diagnosis whose verdict names an effect (or none), the misfit described is the
+        calibrated baseline's, not an ``unexplained`` one.
+        """
+        excess = _excess(self.baseline_cost, self.noise_cost, self.forms)
+        summary = _summarise(verdict, self.misfit(), self.forms, self.best, excess)
+        return replace(self, summary=summary)
+
     def verdict_entry(self) -> dict[str, object] | None:
         """``verdict.unexplained_form`` of interface.md (None when nothing stands out)."""
         if self.best is None:
@@ -952,6 +962,20 @@ def _character_words(misfit: ChannelMisfit) -> list[str]:
     if misfit.drifts:
         words.append("drifting")
     return words
+
+
+def _excess(
+    baseline_cost: float, noise_cost: float | None, ranked: Sequence[FormFit]
+) -> float | None:
+    """The baseline's held-out error over the noise's share (None when the noise is unknown).
+
+    No form fitted on training predicts held-out noise, so the noise's share is at most what
+    the best form left.
+    """
+    floor = noise_cost
+    if floor is not None and ranked:
+        floor = min(floor, baseline_cost / max(ranked[0].improvement, 1.0))
+    return None if floor is None else baseline_cost / max(floor, 1e-300)
 
 
 def _summarise(
@@ -1148,10 +1172,7 @@ def describe_residual(
                 )
             )
     ranked = tuple(sorted(fitted, key=lambda f: f.improvement, reverse=True))
-    floor = noise_cost
-    if floor is not None and ranked:  # no form fitted on training predicts held-out noise
-        floor = min(floor, baseline_cost / max(ranked[0].improvement, 1.0))
-    excess = None if floor is None else baseline_cost / max(floor, 1e-300)
+    excess = _excess(baseline_cost, noise_cost, ranked)
     stands_out = bool(ranked) and ranked[0].improvement >= STANDS_OUT_RATIO
     if excess is not None and excess < NOISE_EXCESS:
         stands_out = False

@@ -152,6 +152,10 @@ def test_a_tap_that_rings_too_little_to_show_is_read_through_its_mode(tmp_path: 
     assert delay.effects == ("sensor_delay",), delay.explanation
     reading = [c for c in delay.checks["sensor_delay"] if c.name == "rivals"]
     assert reading and reading[0].passed and "p_b" in reading[0].finding, delay.checks
+    # what the generic forms say of the misfit is the baseline's, not an "unexplained" one
+    assert tap.residual is not None and tap.residual.summary.startswith("unexplained;")
+    assert delay.residual is not None
+    assert delay.residual.summary.startswith("the calibrated LTI baseline's misfit;")
 
 
 def test_a_late_master_cylinder_pressure_is_not_named_a_hose(tmp_path: Path) -> None:

@@ -192,6 +192,11 @@ def test_the_form_that_made_the_misfit_is_ranked_first_and_cuts_the_error_three_
     assert description.shares[channel] > 0.9
     assert description.summary.startswith("unexplained; looks like")
     assert f"of {channel}" in description.summary
+    # beside a verdict that names an effect, the same description is the baseline's misfit
+    head = "the baseline's misfit"
+    baseline = description.reworded(head)
+    assert baseline.summary == description.summary.replace("unexplained", head, 1)
+    assert baseline.forms == description.forms and baseline.best == description.best
     assert description.verdict_entry() == {
         "description": best.description,
         "form": form,
