@@ -214,7 +214,6 @@ def rival_check(model: Model, hypothesis: Fit) -> CheckOutcome:
     """No rival physics, fitted in a member's place, is its own and explains about as well."""
     members = list(model.candidates)
     told: list[str] = []
-    column = 0
     for index, (member, own) in enumerate(own_columns(members, hypothesis.theta)):
         for rival in member.rivals(own):
             replaced = [rival if k == index else m for k, m in enumerate(members)]
@@ -222,7 +221,7 @@ def rival_check(model: Model, hypothesis: Fit) -> CheckOutcome:
                 fitted = fit(Model(model.calibration, replaced, model.dataset))
             except FitError:
                 continue
-            values = fitted.theta[column : column + len(rival.parameters)]
+            values = list(own_columns(replaced, fitted.theta))[index][1]
             apart = fitted.held_out_cost / max(hypothesis.held_out_cost, 1e-300)
             if rival.holds(values) and apart < rival.told_apart:
                 lower = "" if rival.told_apart == 1.0 else f"{rival.told_apart:g} times "
@@ -238,7 +237,6 @@ def rival_check(model: Model, hypothesis: Fit) -> CheckOutcome:
                 f"{rival.in_words(values)}{unlike}: held-out error {apart:.2f} times "
                 f"{member.name}'s"
             )
-        column += len(member.parameters)
     if not told:
         return CheckOutcome("rivals", True, "no rival its physics could stand in for")
     return CheckOutcome("rivals", True, f"told from its rivals: {'; '.join(told)}")

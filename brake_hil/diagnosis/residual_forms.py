@@ -70,6 +70,7 @@ import scipy.optimize
 import scipy.signal
 
 from brake_hil.diagnosis.dataset import Dataset, Window
+from brake_hil.diagnosis.engine.mechanisms import tustin_mode
 from brake_hil.topics import OUTPUT_CHANNELS
 from brake_hil.types import FloatArray, IndexArray
 
@@ -464,18 +465,8 @@ class Resonance(ResidualForm):
         """The mode's relative motion, Tustin-discretised with the frequency prewarped."""
         frequency, zeta, gain = float(x[0]), float(np.exp(x[1])), float(x[2])
         dt = data.sample_time
-        nyquist_safe = min(frequency, 0.45 / dt)
-        omega = 2.0 / dt * math.tan(math.pi * nyquist_safe * dt)  # prewarped (rad/s)
-        k = 2.0 / dt  # Tustin: s = k (1 - 1/z) / (1 + 1/z)
-        a0 = k**2 + 2.0 * zeta * omega * k + omega**2
-        b = np.array([-(k**2), 2.0 * k**2, -(k**2)]) / a0
-        a = np.array(
-            [
-                1.0,
-                (2.0 * omega**2 - 2.0 * k**2) / a0,
-                (k**2 - 2.0 * zeta * omega * k + omega**2) / a0,
-            ]
-        )
+        _, relative, a = tustin_mode(frequency, zeta, dt)
+        b = -relative  # driven by -y_hat''
         decay = 5.0 / (zeta * 2.0 * math.pi * frequency)  # s
         periods = min(int(np.ceil(decay / (data.period_samples * dt))) + 1, 12)
         parts = []

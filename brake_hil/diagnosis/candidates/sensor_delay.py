@@ -29,6 +29,12 @@ late ``p_i``; each set aside a true late ``p_i`` on a fresh seed.)"""
 CHANNELS = ("p_b", "F_k", "x_c")
 
 
+def _skews(theta: FloatArray) -> FloatArray:
+    """Each channel's delay over the median of the three (s): its acquisition skew."""
+    delays = np.asarray(theta[:3], dtype=float)
+    return np.asarray(delays - np.median(delays), dtype=float)
+
+
 class SensorDelay(Candidate):
     """Sensor delay: each channel is acquired late by its own delay.
 
@@ -53,9 +59,8 @@ class SensorDelay(Candidate):
         Every output leading alike is the input ``p_i`` acquired late. A common lag of every
         output is the model's own phase error, not acquisition skew.
         """
-        delays = np.asarray(theta[:3], dtype=float)
-        spread = float(np.max(np.abs(delays - np.median(delays))))
-        return spread > SKEW_THRESHOLD or float(np.max(delays)) < -SKEW_THRESHOLD
+        spread = float(np.max(np.abs(_skews(theta))))
+        return spread > SKEW_THRESHOLD or float(np.max(theta[:3])) < -SKEW_THRESHOLD
 
     def segments_disagree(self, per_segment: FloatArray) -> str | None:
         """A skew that changes between the segments (rows).
@@ -92,8 +97,7 @@ class SensorDelay(Candidate):
         too, but its reading rings after each edge; what the delay leaves on that channel is
         then a mode (``resonance``).
         """
-        delays = np.asarray(theta[:3], dtype=float)
-        skews = delays - np.median(delays)
+        skews = _skews(theta)
         return {c: "resonance" for c, skew in zip(CHANNELS, skews) if abs(skew) > SKEW_THRESHOLD}
 
     def rivals(self, theta: FloatArray) -> tuple[Rival, ...]:
@@ -105,8 +109,7 @@ class SensorDelay(Candidate):
         out as ``p_b`` 3.2 ms late, ``F_k`` and ``x_c`` 1.3 and 0.8 ms early, the seal's
         damping doubled).
         """
-        delays = np.asarray(theta[:3], dtype=float)
-        skews = np.abs(delays - np.median(delays))
+        skews = np.abs(_skews(theta))
         most = int(np.argmax(skews))
         return (ResonantReading(CHANNELS[most]),) if skews[most] > SKEW_THRESHOLD else ()
 

@@ -26,6 +26,7 @@ from brake_hil.diagnosis.engine.mechanisms import (
     ChannelReading,
     FrictionElement,
     LeadingOutputs,
+    tustin_mode,
 )
 from brake_hil.diagnosis.engine.plant import CALIPER_FORCE, LINE_DROP, RELATIVE_FORCE, Coupling
 from brake_hil.diagnosis.engine.terms import Entry, ModelSpec, State, Step, Term
@@ -45,5 +46,6 @@ __all__ = [
     "State",
     "Step",
     "Term",
+    "tustin_mode",
     "simulate_batch",
 ]

@@ -17,7 +17,7 @@ from brake_hil.diagnosis.engine.plant import RELATIVE_FORCE, Coupling
 from brake_hil.diagnosis.engine.terms import Entry, State, Step, Term
 from brake_hil.types import FloatArray, IndexArray
 
-__all__ = ["ChannelDelay", "ChannelReading", "FrictionElement", "LeadingOutputs"]
+__all__ = ["ChannelDelay", "ChannelReading", "FrictionElement", "LeadingOutputs", "tustin_mode"]
 
 STUCK, SLIPPING = 0, 1
 
@@ -167,15 +167,9 @@ class ChannelReading(Term):
 
     def transform(self, outputs: FloatArray, sample_time: float) -> FloatArray:
         """Filter the channel of every set."""
-        k = 2.0 / sample_time  # Tustin: s = k (1 - 1/z) / (1 + 1/z)
         for b in range(outputs.shape[0]):
-            frequency = min(float(self.frequency[b]), 0.45 / sample_time)
-            omega = k * math.tan(math.pi * frequency * sample_time)  # prewarped, rad/s
-            damping = 2.0 * float(self.damping_ratio[b]) * omega * k
-            a0 = k * k + damping + omega * omega
-            numerator = np.array([1.0, 2.0, 1.0]) * omega * omega / a0
-            denominator = np.array(
-                [1.0, 2.0 * (omega * omega - k * k) / a0, (k * k - damping + omega * omega) / a0]
+            numerator, _, denominator = tustin_mode(
+                float(self.frequency[b]), float(self.damping_ratio[b]), sample_time
             )
             signal = outputs[b, self.channel]
             start = scipy.signal.lfilter_zi(numerator, denominator) * signal[0]
@@ -183,6 +177,28 @@ class ChannelReading(Term):
                 numerator, denominator, signal, zi=start
             )[0]
         return outputs
+
+
+def tustin_mode(
+    frequency: float, damping_ratio: float, sample_time: float
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """A second-order mode ``s^2 + 2 zeta w s + w^2``, Tustin-discretised, ``w`` prewarped.
+
+    Returns the numerators of its read-through ``w^2 / (...)`` and of its relative motion
+    ``s^2 / (...)``, and the common denominator (``z^-1`` coefficients). The frequency (Hz)
+    is held under 0.45 of the sample rate.
+    """
+    k = 2.0 / sample_time  # Tustin: s = k (1 - 1/z) / (1 + 1/z)
+    frequency = min(frequency, 0.45 / sample_time)
+    omega = k * math.tan(math.pi * frequency * sample_time)  # prewarped, rad/s
+    damping = 2.0 * damping_ratio * omega * k
+    a0 = k * k + damping + omega * omega
+    read_through = np.array([1.0, 2.0, 1.0]) * omega * omega / a0
+    relative = np.array([1.0, -2.0, 1.0]) * k * k / a0
+    denominator = np.array(
+        [1.0, 2.0 * (omega * omega - k * k) / a0, (k * k - damping + omega * omega) / a0]
+    )
+    return read_through, relative, denominator
 
 
 @dataclass(frozen=True, eq=False)
