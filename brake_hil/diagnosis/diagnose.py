@@ -88,7 +88,8 @@ Since then a form that is a hypothesis's own physics in a free shape (``Candidat
 does not count against it (:meth:`Summary.form_bar`)."""
 STAND_IN_MARGIN = 0.0
 """Decision margin (log units) a verdict keeps at most when a better-scoring hypothesis was
-set aside by a physics check (:mod:`.physics_checks`): confidence at most
+set aside by a physics check (:mod:`.physics_checks`), or when a single is named whose own
+fitted values show another physics beside it (``Candidate.not_alone``): confidence at most
 ``_confidence(0)``, about 0.71."""
 CHECK_ROUNDS = 3
 """Verdicts checked at most: a verdict that fails is set aside and the next one checked."""
@@ -330,6 +331,11 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         explanation += (
             f" Set aside by a physics check, {first.replace('+', ' and ')}: {finding}{also}."
         )
+    doubt = (
+        summary.not_alone.get(chosen.effects[0]) if chosen and len(chosen.effects) == 1 else None
+    )
+    if doubt is not None:
+        explanation += f" Likely not alone, by its own fitted values: {doubt}."
     if verdict.effects == ("unexplained",):
         explanation += f" {residual.summary[0].upper()}{residual.summary[1:]}."
     else:  # the description is of the baseline's misfit, which the verdict explains or not
@@ -454,6 +460,7 @@ class Summary:
     baseline_channel_nrmse: dict[str, float] = field(default_factory=dict)  # held-out
     pairs_ruled_out: tuple[tuple[str, ...], ...] = ()  # not fitted: can never be named
     stand_ins: dict[str, str] = field(default_factory=dict)  # "a+b": the physics check failed
+    not_alone: dict[str, str] = field(default_factory=dict)  # single: Candidate.not_alone
     form_gain: float = 1.0  # the best generic form's held-out improvement (residual_forms)
     form_gains: dict[str, float] = field(default_factory=dict)  # "form channel": improvement
 
@@ -516,6 +523,7 @@ class Summary:
             baseline_channel_nrmse=dict(document.get("baseline_channel_nrmse", {})),
             pairs_ruled_out=tuple(tuple(p) for p in document.get("pairs_ruled_out", ())),
             stand_ins=dict(document.get("stand_ins", {})),
+            not_alone=dict(document.get("not_alone", {})),
             form_gain=float(document.get("form_gain", 1.0)),
             form_gains={str(k): float(v) for k, v in document.get("form_gains", {}).items()},
         )
@@ -556,6 +564,12 @@ def summarise(
         pairs=tuple(hypothesis(h) for h in pairs),
         baseline_channel_nrmse=dict(baseline.held_out_nrmse),
         pairs_ruled_out=tuple(sorted(pairs_ruled_out)),
+        not_alone={
+            h.effects[0]: finding
+            for h in singles
+            for member, own in own_columns([candidate(h.effects[0])], h.theta)
+            if (finding := member.not_alone(own)) is not None
+        },
         form_gain=max((form_gains or {}).values(), default=1.0),
         form_gains=dict(form_gains or {}),
     )
@@ -718,6 +732,9 @@ def decide(summary: Summary) -> Verdict:
         if "+".join(h.effects) in summary.stand_ins and gain(h) >= required and h.plausible
     ]
     cap = [STAND_IN_MARGIN] if rejected else []
+    # A single whose own fitted values show another physics beside it (Candidate.not_alone):
+    # named alone, no surer than a stand-in's replacement.
+    cap += [STAND_IN_MARGIN] if chosen is not None and _alone_doubted(summary, chosen) else []
     # Hypotheses that would have been named (before the chosen one) but for a generic form
     # doing as well: the verdict is no surer than the nearest stayed below that bar.
     below_bar = [
@@ -763,6 +780,11 @@ def decide(summary: Summary) -> Verdict:
         *cap,
     )
     return Verdict(("unexplained",) if unexplained else (), _confidence(margin), None, margin)
+
+
+def _alone_doubted(summary: Summary, h: Hypothesis) -> bool:
+    """A single whose fitted values show another physics beside it (:attr:`Summary.not_alone`)."""
+    return len(h.effects) == 1 and h.effects[0] in summary.not_alone
 
 
 def identified(summary: Summary, h: Hypothesis) -> bool:

@@ -148,6 +148,27 @@ def test_a_stand_in_is_set_aside_and_the_verdict_leans_to_unexplained() -> None:
     assert replaced.confidence <= diagnosis._confidence(diagnosis.STAND_IN_MARGIN) + 1e-12
 
 
+def test_a_single_not_alone_by_its_own_values_is_named_but_unsure() -> None:
+    """A single whose fitted values show another physics beside it (Candidate.not_alone) is
+    still named (it is there), no surer than a stand-in's replacement; a pair is not capped,
+    and the field replays through JSON."""
+    strong = single("sensor_delay", BASE / 200)
+    clear = decide(summary(strong))
+    assert clear.effects == ("sensor_delay",) and clear.confidence > 0.9
+    doubted = dataclasses.replace(
+        summary(strong), not_alone={"sensor_delay": "a skew beside a common lag"}
+    )
+    verdict = decide(doubted)
+    assert verdict.effects == ("sensor_delay",) and verdict.chosen == ("sensor_delay",)
+    assert verdict.confidence <= diagnosis._confidence(diagnosis.STAND_IN_MARGIN) + 1e-12
+    assert Summary.from_dict(json.loads(json.dumps(doubted.as_dict()))) == doubted
+    # another single named: the doubt is the delay's, not the verdict's
+    other = dataclasses.replace(
+        doubted, singles=(single("sensor_delay", BASE / 3), single("orifice_flow", BASE / 200))
+    )
+    assert decide(other).effects == ("orifice_flow",) and decide(other).confidence > 0.9
+
+
 def test_pairs_that_can_never_be_named_charge_their_worst_case() -> None:
     """A pair whose better single leaves under PAIR_SHARE is ruled out, not fitted; the
     verdict is the same and its confidence no higher than with any fit of that pair."""

@@ -103,3 +103,31 @@ def test_a_delay_is_the_same_at_every_amplitude() -> None:
     assert delay.segments_disagree(shrinking[:1]) is None  # one segment: nothing to compare
     # other candidates leave it to the generic test
     assert candidate("hose_compliance").segments_disagree(np.ones((3, 1))) is None
+
+
+def test_a_skew_beside_a_common_lag_says_the_delay_is_not_alone() -> None:
+    """Fitted delays (s) of p_b, F_k, x_c, as fitted on seed 1001's recordings: one late
+    channel, or every output leading alike (a late ``p_i``), is one delay; a skew beside a
+    common lag or lead of the other two outputs is two timing errors (hose + delay of p_b,
+    family b case 49; of F_k, case 89)."""
+    from brake_hil.diagnosis.candidates import candidate
+
+    delay = candidate("sensor_delay")
+    for alone in (
+        [-0.08e-3, 2.88e-3, 0.20e-3],  # a late F_k (b case 14)
+        [0.23e-3, 0.44e-3, 3.39e-3],  # a late x_c, the others a little off (b case 146)
+        [-3.25e-3, -3.10e-3, -3.12e-3],  # a late p_i (b case 118)
+        [0.0, 0.0, 0.0],
+    ):
+        assert delay.not_alone(np.array(alone)) is None, alone
+    with_hose = delay.not_alone(np.array([4.84e-3, 1.05e-3, 1.00e-3]))
+    assert with_hose is not None
+    assert "skew of p_b (+3.79 ms)" in with_hose and "common lag" in with_hose
+    assert "(+1.02 ms)" in with_hose  # the mean of F_k's and x_c's
+    lead = delay.not_alone(np.array([-0.69e-3, 2.91e-3, -1.12e-3]))
+    assert lead is not None and "skew of F_k" in lead and "common lead" in lead
+    # two late channels read as a skew of the third: flagged too, and said so
+    two_late = delay.not_alone(np.array([0.0, 2.0e-3, 2.0e-3]))
+    assert two_late is not None and "a second late channel" in two_late
+    # every other candidate shows nothing beside itself
+    assert candidate("hose_compliance").not_alone(np.array([0.5, 0.3, 0.02])) is None

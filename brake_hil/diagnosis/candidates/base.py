@@ -176,6 +176,15 @@ class Candidate:
         """
         return ()
 
+    def not_alone(self, theta: FloatArray) -> str | None:
+        """What its fitted own parameters ``theta`` show beside this physics, in words.
+
+        A fit can carry, besides this physics, a part no instance of it makes: then it is
+        likely not alone in the recording (named alone, the verdict is no surer than
+        ``diagnose.STAND_IN_MARGIN`` allows). Default: None, nothing beside it.
+        """
+        return None
+
     def start(self, context: Context) -> FloatArray:
         """Start values of the parameters (may use the rig's derived quantities)."""
         return np.array([p.start for p in self.parameters])

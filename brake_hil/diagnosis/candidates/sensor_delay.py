@@ -113,6 +113,30 @@ class SensorDelay(Candidate):
         most = int(np.argmax(skews))
         return (ResonantReading(CHANNELS[most]),) if skews[most] > SKEW_THRESHOLD else ()
 
+    def not_alone(self, theta: FloatArray) -> str | None:
+        """A skewed channel beside a common lag (or lead) of the other two outputs.
+
+        One late channel moves that channel alone; a late ``p_i`` moves every output alike.
+        Fitted delays that do both (one channel skewed over ``SKEW_THRESHOLD`` and the other
+        two off zero by as much, alike) are two timing errors: a second late channel, or a
+        lag the calibrated model cannot make (a hose's or air's) read as a common delay
+        (:meth:`plausible`: a common lag is the model's own phase error).
+        """
+        delays = np.asarray(theta[:3], dtype=float)
+        skews = _skews(theta)
+        most = int(np.argmax(np.abs(skews)))
+        if abs(skews[most]) <= SKEW_THRESHOLD:
+            return None
+        common = float(np.mean(np.delete(delays, most)))
+        if abs(common) <= SKEW_THRESHOLD:
+            return None
+        return (
+            f"its delays are a skew of {CHANNELS[most]} ({1e3 * skews[most]:+.2f} ms) and a "
+            f"common {'lag' if common > 0 else 'lead'} of the other outputs "
+            f"({1e3 * common:+.2f} ms): no one late channel does both; a second late channel, "
+            "or a lag of the line the calibrated model lacks (a hose, air), is there too"
+        )
+
     def consistent(self, evidence: dict[str, float]) -> bool:
         """A channel lags by more than a millisecond."""
         return max(abs(evidence.get(f"lag_{c}_ms", 0.0)) for c in CHANNELS) > 1.0
