@@ -22,25 +22,29 @@ REFERENCE_PRESSURE = 1.0e6
 
 @dataclass(frozen=True, eq=False)
 class LoadShareSlope(Term):
-    """A caliper force ``-s_1 A_eb p_b (p_b - p_ref) / p_ref`` held over each step."""
+    """A caliper force ``-A_eb p_b (s_1 u + s_2 u^2)`` held over each step.
+
+    ``u = (p_b - p_ref) / p_ref``.
+    """
 
     slope: FloatArray  # -, s_1
+    curvature: FloatArray  # -, s_2
 
     def start(self, state: State) -> Step:
         """The force with each set's ``A_eb``."""
-        return _LoadShare(self.slope, np.array([p.bore_area for p in state.params]))
+        bore_area = np.array([p.bore_area for p in state.params])
+        return _LoadShare(self.slope, self.curvature, bore_area)
 
 
 class _LoadShare(Step):
-    def __init__(self, slope: FloatArray, bore_area: FloatArray) -> None:
-        self.slope, self.bore_area = slope, bore_area
+    def __init__(self, slope: FloatArray, curvature: FloatArray, bore_area: FloatArray) -> None:
+        self.slope, self.curvature, self.bore_area = slope, curvature, bore_area
 
     def inputs(self, state: State, explicit: FloatArray) -> None:
         """The load-dependent part of the caliper's force."""
         p_b = state.value("p_b")
-        explicit[:, CALIPER_FORCE] += (
-            -self.bore_area * self.slope * p_b * (p_b - REFERENCE_PRESSURE) / REFERENCE_PRESSURE
-        )
+        u = (p_b - REFERENCE_PRESSURE) / REFERENCE_PRESSURE
+        explicit[:, CALIPER_FORCE] += -self.bore_area * p_b * u * (self.slope + self.curvature * u)
 
 
 class EccentricLoad(Candidate):
@@ -49,8 +53,10 @@ class EccentricLoad(Candidate):
     When the block's centre of force does not coincide with the pistons', the moment arms
     ``b_p``, ``b_k``, ``b_b``, ``b_c`` make the support columns carry part of the load, so the
     force on the caliper body is ``s A_eb p_b`` (seed eq. 22, five-washer results). The share
-    may shift with load as the contact settles: ``s = 1 + s_0 + s_1 (p_b - p_ref) / p_ref``,
-    ``p_ref`` = 1 MPa. It scales x_c and leaves p_b nearly alone.
+    may shift with load as the contact settles, to second order in the load about ``p_ref`` =
+    1 MPa: ``s = 1 + s_0 + s_1 u + s_2 u^2``, ``u = (p_b - p_ref) / p_ref`` (a seating
+    contact's share changes fastest at low load and levels off). It scales x_c and leaves p_b
+    nearly alone.
     """
 
     entry = CATALOGUE["eccentric_load"]
@@ -58,12 +64,13 @@ class EccentricLoad(Candidate):
     parameters = (
         CandidateParameter("share_offset", "-", -0.6, 0.6, 0.0),
         CandidateParameter("share_slope", "-", -0.4, 0.4, 0.0),
+        CandidateParameter("share_curvature", "-", -0.2, 0.2, 0.0),
     )
 
     def fill(self, draft: Draft, theta: FloatArray, context: Context) -> None:
         """Scale A_eb in the caliper's equation and add the load-dependent part."""
         draft.scale("bore_area", 1.0 + theta[:, 0])
-        draft.add(LoadShareSlope(theta[:, 1].copy()))
+        draft.add(LoadShareSlope(theta[:, 1].copy(), theta[:, 2].copy()))
 
     def consistent(self, evidence: dict[str, float]) -> bool:
         """x_c is off by more than p_b."""
