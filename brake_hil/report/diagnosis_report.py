@@ -184,9 +184,11 @@ def _text(raw: str) -> str:
     return re.sub(r"``(.+?)``", r"<code>\1</code>", escaped).replace("``", "")
 
 
-def _confidence_words(confidence: float) -> str:
+def _confidence_words(confidence: float, doubt: str | None = None) -> str:
     if confidence >= 0.9:
         return "high"
+    if doubt is not None and confidence >= 0.5:
+        return "moderate: likely not alone, by its own fitted values (what to check, below)"
     if confidence >= 0.7:
         return "moderate: check the runner-up below"
     return "low: treat the verdict as a hint, not a finding"
@@ -226,11 +228,13 @@ def _summary(diagnosis: Diagnosis, findings: list[Finding]) -> str:
             f"explains the recording (worst channel {worst}, NRMSE "
             f"{_percent(before[worst]['nrmse'])})."
         )
+    doubt = diagnosis.summary.not_alone.get(effects[0]) if len(effects) == 1 else None
     items.append(
-        f"<b>How sure:</b> {_confidence_words(diagnosis.confidence)} "
+        f"<b>How sure:</b> {_confidence_words(diagnosis.confidence, doubt)} "
         f"(confidence {diagnosis.confidence:.2f})."
     )
     checks = [RIG_CHECKS[e] for e in effects if e in RIG_CHECKS]
+    checks += [f"what else is there: {doubt}"] if doubt is not None else []
     checks += [f.words for f in findings]
     if checks:
         listed = "".join(f"<li>{_text(c)}</li>" for c in checks)

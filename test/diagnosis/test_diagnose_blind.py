@@ -190,6 +190,10 @@ def test_a_delay_beside_a_hose_is_named_but_not_sure(tmp_path: Path) -> None:
     assert both.confidence <= _confidence(STAND_IN_MARGIN) + 1e-9
     assert "skew of p_b" in both.summary.not_alone["sensor_delay"]
     assert "Likely not alone" in both.explanation and "a hose" in both.explanation
+    from brake_hil.report.diagnosis_report import write_report
+
+    page = write_report(both, tmp_path / "report").read_text()
+    assert "likely not alone" in page and "what else is there: its delays are a skew" in page
     alone = _planned_case(tmp_path, "b", 1001, 14, "sensor_delay")
     assert alone.effects == ("sensor_delay",) and alone.confidence > 0.9, alone.explanation
     assert "sensor_delay" not in alone.summary.not_alone
