@@ -331,9 +331,7 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         explanation += (
             f" Set aside by a physics check, {first.replace('+', ' and ')}: {finding}{also}."
         )
-    doubt = (
-        summary.not_alone.get(chosen.effects[0]) if chosen and len(chosen.effects) == 1 else None
-    )
+    doubt = summary.doubt(chosen.effects) if chosen is not None else None
     if doubt is not None:
         explanation += f" Likely not alone, by its own fitted values: {doubt}."
     if verdict.effects == ("unexplained",):
@@ -474,6 +472,10 @@ class Summary:
             return self.form_gain
         kin = {f"{form} {channel}" for e in effects for form, channel in candidate(e).kin_forms}
         return max((g for key, g in self.form_gains.items() if key not in kin), default=1.0)
+
+    def doubt(self, effects: tuple[str, ...]) -> str | None:
+        """Why ``effects``, a single, is likely not alone (:attr:`not_alone`); else None."""
+        return self.not_alone.get(effects[0]) if len(effects) == 1 else None
 
     @property
     def floor_cost(self) -> float:
@@ -734,7 +736,7 @@ def decide(summary: Summary) -> Verdict:
     cap = [STAND_IN_MARGIN] if rejected else []
     # A single whose own fitted values show another physics beside it (Candidate.not_alone):
     # named alone, no surer than a stand-in's replacement.
-    cap += [STAND_IN_MARGIN] if chosen is not None and _alone_doubted(summary, chosen) else []
+    cap += [STAND_IN_MARGIN] if chosen is not None and summary.doubt(chosen.effects) else []
     # Hypotheses that would have been named (before the chosen one) but for a generic form
     # doing as well: the verdict is no surer than the nearest stayed below that bar.
     below_bar = [
@@ -780,11 +782,6 @@ def decide(summary: Summary) -> Verdict:
         *cap,
     )
     return Verdict(("unexplained",) if unexplained else (), _confidence(margin), None, margin)
-
-
-def _alone_doubted(summary: Summary, h: Hypothesis) -> bool:
-    """A single whose fitted values show another physics beside it (:attr:`Summary.not_alone`)."""
-    return len(h.effects) == 1 and h.effects[0] in summary.not_alone
 
 
 def identified(summary: Summary, h: Hypothesis) -> bool:

@@ -228,7 +228,7 @@ def _summary(diagnosis: Diagnosis, findings: list[Finding]) -> str:
             f"explains the recording (worst channel {worst}, NRMSE "
             f"{_percent(before[worst]['nrmse'])})."
         )
-    doubt = diagnosis.summary.not_alone.get(effects[0]) if len(effects) == 1 else None
+    doubt = diagnosis.summary.doubt(tuple(effects)) if effects else None
     items.append(
         f"<b>How sure:</b> {_confidence_words(diagnosis.confidence, doubt)} "
         f"(confidence {diagnosis.confidence:.2f})."

@@ -21,7 +21,7 @@ REFERENCE_PRESSURE = 1.0e6
 
 
 @dataclass(frozen=True, eq=False)
-class LoadShareSlope(Term):
+class LoadShareChange(Term):
     """A caliper force ``-A_eb p_b (s_1 u + s_2 u^2)`` held over each step.
 
     ``u = (p_b - p_ref) / p_ref``.
@@ -70,7 +70,7 @@ class EccentricLoad(Candidate):
     def fill(self, draft: Draft, theta: FloatArray, context: Context) -> None:
         """Scale A_eb in the caliper's equation and add the load-dependent part."""
         draft.scale("bore_area", 1.0 + theta[:, 0])
-        draft.add(LoadShareSlope(theta[:, 1].copy(), theta[:, 2].copy()))
+        draft.add(LoadShareChange(theta[:, 1].copy(), theta[:, 2].copy()))
 
     def consistent(self, evidence: dict[str, float]) -> bool:
         """x_c is off by more than p_b."""
