@@ -55,14 +55,7 @@ fitting the residue of a parameter error (measured: nulls 2-6x, the weakest real
 PAIR_RATIO = 1.8
 """A second effect must cut it again at least this much ..."""
 PAIR_SHARE = 0.03
-"""... and explain at least this share of the baseline's held-out error more than it, or
-``NOISE_EXCESS`` times the noise's share (:meth:`Summary.second_effect_margins`): beside a
-strong first effect 3 % of the baseline's error is many times the noise, and a second effect
-need only stand out of the noise as a single must. (Measured 2026-11-26, seed 1001 with the
-eccentric load's share to second order: the hose and the drift beside an eccentric load cut
-what it left 3.5-5.5 times, by 37-79 times the noise's share, 0.7-1.0 % of the baseline's;
-on three true eccentric singles the best pair cut 1.01-1.08 times, by 0.3-0.6 times the
-noise's share.)"""
+"""... and explain at least this share of the baseline's held-out error more than it."""
 WINDOW_FLOOR = 0.5
 """No held-out window may get worse than this times the baseline's error (0: no test)."""
 PARAMETER_PENALTY = 0.05
@@ -269,7 +262,7 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         noise_cost=dataset.noise_cost(),
     )
     form_gains = {f"{f.form} {f.channel}": f.improvement for f in residual.forms}
-    ruled_out = unnameable_pairs(baseline, singles, dataset.noise_cost())
+    ruled_out = unnameable_pairs(baseline, singles)
     pairs = _fit_pairs(calibration, dataset, baseline, singles, unfitted, say, ruled_out)
     summary = summarise(
         baseline, singles, pairs, dataset.noise_cost(), evidence, ruled_out, form_gains
@@ -417,15 +410,12 @@ def _fit_pairs(
     return pairs
 
 
-def unnameable_pairs(
-    baseline: Fit, singles: list[Fit], noise_cost: float = 0.0
-) -> frozenset[tuple[str, ...]]:
+def unnameable_pairs(baseline: Fit, singles: list[Fit]) -> frozenset[tuple[str, ...]]:
     """The pairs :func:`_fit_pairs` would fit that :func:`decide` can never name.
 
     A pair is named only if it cuts the held-out error of the better of its two singles by
-    ``PAIR_SHARE`` of the baseline's or ``NOISE_EXCESS`` times the noise's share
-    (``noise_cost``; 0: unknown); no fit has a negative error, so a pair whose better single
-    already leaves less than both cannot be named, whatever its fit. Fitting it
+    ``PAIR_SHARE`` of the baseline's; no fit has a negative error, so a pair whose better
+    single already leaves less than that share cannot be named, whatever its fit. Fitting it
     could change the verdict's confidence only; :func:`decide` charges its worst case
     instead (:attr:`Summary.pairs_ruled_out`).
     """
@@ -434,10 +424,7 @@ def unnameable_pairs(
     )
     if not eligible:
         return frozenset()
-    limit = PAIR_SHARE * baseline.held_out_cost
-    if noise_cost > 0:
-        limit = min(limit, NOISE_EXCESS * noise_cost)
-    best = eligible[0]
+    best, limit = eligible[0], PAIR_SHARE * baseline.held_out_cost
     return frozenset(
         (best.effects[0], other.effects[0])
         for other in eligible[1 : PAIR_SHORTLIST + 1]
@@ -485,22 +472,6 @@ class Summary:
             return self.form_gain
         kin = {f"{form} {channel}" for e in effects for form, channel in candidate(e).kin_forms}
         return max((g for key, g in self.form_gains.items() if key not in kin), default=1.0)
-
-    def second_effect_margins(self, better_cost: float, pair_cost: float) -> tuple[float, float]:
-        """How far a pair clears the pair rule over the better of its singles (log units).
-
-        ``(again, explained)``: its cut of the single's held-out error over ``PAIR_RATIO``,
-        and the error it explains beyond the single over the smaller of ``PAIR_SHARE`` of the
-        baseline's and ``NOISE_EXCESS`` times the noise's share (either suffices; the noise's
-        is the cycle-to-cycle estimate, not counted when unknown). Named only when both are
-        >= 0.
-        """
-        again = math.log(ratio(better_cost, pair_cost) / PAIR_RATIO)
-        explained = max(better_cost - pair_cost, 1e-30)
-        allowances = [PAIR_SHARE * self.baseline_cost]
-        if self.noise_cost > 0:
-            allowances.append(NOISE_EXCESS * self.noise_cost)
-        return again, math.log(explained / min(allowances))
 
     def doubt(self, effects: tuple[str, ...]) -> str | None:
         """Why ``effects``, a single, is likely not alone (:attr:`not_alone`); else None."""
@@ -640,8 +611,7 @@ def hypothesis_note(summary: Summary, effects: tuple[str, ...], verdict: Verdict
     if h is None and effects in summary.pairs_ruled_out:
         return (
             f"not fitted: cannot be named (its better single leaves under "
-            f"{100 * PAIR_SHARE:g} % of the baseline's error and {NOISE_EXCESS:g} times the "
-            "noise's share for a second effect to explain)"
+            f"{100 * PAIR_SHARE:g} % of the baseline's error for a second effect to explain)"
         )
     if h is None:
         return "not fitted"
@@ -663,14 +633,12 @@ def hypothesis_note(summary: Summary, effects: tuple[str, ...], verdict: Verdict
         better_cost = better.held_out_cost if better is not None else base
         again = ratio(better_cost, h.held_out_cost)
         share = (better_cost - h.held_out_cost) / base
-        if min(summary.second_effect_margins(better_cost, h.held_out_cost)) < 0:
+        if again < PAIR_RATIO or share < PAIR_SHARE:
             name = better.effects[0] if better is not None else "the baseline"
-            noise = (better_cost - h.held_out_cost) / max(summary.noise_cost, 1e-30)
             return (
                 f"not named (pair rule): a second effect must cut the error of {name} alone "
-                f"{PAIR_RATIO:g} times again and by {100 * PAIR_SHARE:g} % of the baseline's "
-                f"or {NOISE_EXCESS:g} times the noise's share; this pair cuts it {again:.2f} "
-                f"times, by {100 * share:.1f} % ({noise:.1f} times the noise's share)"
+                f"{PAIR_RATIO:g} times again and by {100 * PAIR_SHARE:g} % of the baseline's; "
+                f"this pair cuts it {again:.2f} times, by {100 * share:.1f} %"
             )
     required = required_ratio(summary)
     if gain < required:
@@ -735,7 +703,10 @@ def decide(summary: Summary) -> Verdict:
             return True
         members = [singles[(e,)] for e in h.effects if (e,) in singles]
         better = min((m.held_out_cost for m in members), default=base)
-        return min(summary.second_effect_margins(better, h.held_out_cost)) >= 0
+        return (
+            ratio(better, h.held_out_cost) >= PAIR_RATIO
+            and (better - h.held_out_cost) / base >= PAIR_SHARE
+        )
 
     def holds_everywhere(h: Hypothesis) -> bool:
         return all(
@@ -779,13 +750,18 @@ def decide(summary: Summary) -> Verdict:
         margins = [own - max(rivals, default=0.0), own - math.log(required)]
         if len(chosen.effects) == 1:  # how near a pair with it came to being named instead
             margins += [
-                -min(summary.second_effect_margins(chosen.held_out_cost, p.held_out_cost))
+                max(
+                    math.log(PAIR_RATIO) - (log_gains[p.effects] - own),
+                    math.log(
+                        PAIR_SHARE * base / max(chosen.held_out_cost - p.held_out_cost, 1e-30)
+                    ),
+                )
                 for p in summary.pairs
                 if chosen.effects[0] in p.effects and p.plausible
             ]
             if any(chosen.effects[0] in p for p in summary.pairs_ruled_out):
                 # a pair left unfitted: the worst its fit could do (an error of zero)
-                margins.append(-summary.second_effect_margins(chosen.held_out_cost, 0.0)[1])
+                margins.append(math.log(PAIR_SHARE * base / max(chosen.held_out_cost, 1e-30)))
         else:  # how far the pair clears its better single
             alone = max(log_gains.get((e,), 0.0) for e in chosen.effects)
             margins.append(own - alone - math.log(PAIR_RATIO))

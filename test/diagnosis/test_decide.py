@@ -169,44 +169,6 @@ def test_a_single_not_alone_by_its_own_values_is_named_but_unsure() -> None:
     assert decide(other).effects == ("orifice_flow",) and decide(other).confidence > 0.9
 
 
-def test_a_second_effect_beside_a_strong_one_need_only_stand_out_of_the_noise() -> None:
-    """Beside a strong first effect (it leaves 0.1 % of the baseline's error), a pair that
-    cuts what it leaves 3 times explains only 0.07 % of the baseline's, under PAIR_SHARE, but
-    67 times the noise's share: named. The same pair in ten times the noise is not, and
-    ``unnameable_pairs`` rules out only what neither allowance leaves room for."""
-    strong = single("eccentric_load", BASE / 1000)
-    weak = single("hose_compliance", BASE / 1.05)
-    both = pair("eccentric_load", "hose_compliance", BASE / 3000)
-    quiet = dataclasses.replace(summary(strong, weak, both), noise_cost=BASE / 1e5)
-    verdict = decide(quiet)
-    assert verdict.effects == ("eccentric_load", "hose_compliance"), verdict
-    again, explained = quiet.second_effect_margins(strong.held_out_cost, both.held_out_cost)
-    assert again == pytest.approx(np.log(3 / diagnosis.PAIR_RATIO))
-    assert explained == pytest.approx(np.log((1 / 1000 - 1 / 3000) * 1e5 / diagnosis.NOISE_EXCESS))
-    note = diagnosis.hypothesis_note(quiet, ("eccentric_load",), verdict)
-    assert not note.startswith("the verdict")
-    noisy = dataclasses.replace(quiet, noise_cost=BASE / 1e4 * 10)
-    assert decide(noisy).effects == ("eccentric_load",)
-    note = diagnosis.hypothesis_note(noisy, ("eccentric_load", "hose_compliance"), decide(noisy))
-    assert note.startswith("not named (pair rule)") and "noise's share" in note
-    # unknown noise: the share rule alone, as before
-    assert decide(dataclasses.replace(quiet, noise_cost=0.0)).effects == ("eccentric_load",)
-    # ruled out only when the better single leaves under both allowances
-    fits = [_fit(BASE), _fit(BASE / 1000, "eccentric_load"), _fit(BASE / 1.05, "hose_compliance")]
-    pair_names = ("eccentric_load", "hose_compliance")
-    assert pair_names not in diagnosis.unnameable_pairs(fits[0], fits[1:], BASE / 1e5)
-    assert pair_names in diagnosis.unnameable_pairs(fits[0], fits[1:], BASE / 1e4 * 10)
-    assert pair_names in diagnosis.unnameable_pairs(fits[0], fits[1:])
-
-
-def _fit(cost: float, *effects: str) -> diagnosis.Fit:
-    """A fitted hypothesis of held-out cost ``cost`` (its own parameters at their start)."""
-    from brake_hil.diagnosis.candidates import candidate
-
-    own = np.concatenate([[p.start for p in candidate(e).parameters] for e in effects] or [[]])
-    return diagnosis.Fit(effects, np.concatenate([own, [1.0]]), (), (), cost, cost, {})
-
-
 def test_pairs_that_can_never_be_named_charge_their_worst_case() -> None:
     """A pair whose better single leaves under PAIR_SHARE is ruled out, not fitted; the
     verdict is the same and its confidence no higher than with any fit of that pair."""
