@@ -184,14 +184,13 @@ def test_a_delay_beside_a_hose_is_named_but_not_sure(tmp_path: Path) -> None:
     named, no surer than 0.71, and the explanation says what is beside it. A true late
     ``F_k`` (case 14) stays sure."""
     from brake_hil.diagnosis.diagnose import STAND_IN_MARGIN, _confidence
+    from brake_hil.report.diagnosis_report import write_report
 
     both = _planned_case(tmp_path, "b", 1001, 49, "hose_compliance", "sensor_delay")
     assert both.effects == ("sensor_delay",), both.explanation
     assert both.confidence <= _confidence(STAND_IN_MARGIN) + 1e-9
     assert "skew of p_b" in both.summary.not_alone["sensor_delay"]
     assert "Likely not alone" in both.explanation and "a hose" in both.explanation
-    from brake_hil.report.diagnosis_report import write_report
-
     page = write_report(both, tmp_path / "report").read_text()
     assert "likely not alone" in page and "what else is there: its delays are a skew" in page
     alone = _planned_case(tmp_path, "b", 1001, 14, "sensor_delay")
