@@ -110,6 +110,23 @@ def test_an_older_hose_model_without_creep_loads_as_the_elastic_hose_it_was(
     assert np.max(np.abs(crept[0] - elastic[0])) > 1e-3 * np.ptp(elastic[0])
 
 
+def test_an_older_eccentric_load_without_curvature_loads_as_the_linear_share_it_was(
+    tmp_path: Path,
+) -> None:
+    """A file written while the caliper's share was linear in ``p_b`` reads with no
+    curvature; a curvature, when there, changes the prediction."""
+    _, pressure = pulsing_profile((1.38e6,), ramp_s=0.5, pulsing_s=1.5)
+    linear = {"share_offset": -0.2, "share_slope": 0.05}
+    path = tmp_path / "older.json"
+    path.write_text(json.dumps(_model(("eccentric_load",), linear).as_dict()))
+    assert read_improved_model(path).parameters["share_curvature"] == 0.0
+    older = load_improved_model(path, mean_pressure=1.1e6).batch(pressure)
+    curved = _model(("eccentric_load",), {**linear, "share_curvature": -0.05})
+    newer = load_improved_model(curved.save(tmp_path / "newer.json"), mean_pressure=1.1e6)
+    bent = newer.batch(pressure)
+    assert np.max(np.abs(bent[2] - older[2])) > 1e-3 * np.ptp(older[2])  # x_c
+
+
 def test_the_caliper_node_loader_reads_an_improved_model(tmp_path: Path) -> None:
     from brake_hil.live.model_file import load_model
 

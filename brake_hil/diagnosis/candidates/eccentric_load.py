@@ -64,7 +64,7 @@ class EccentricLoad(Candidate):
     parameters = (
         CandidateParameter("share_offset", "-", -0.6, 0.6, 0.0),
         CandidateParameter("share_slope", "-", -0.4, 0.4, 0.0),
-        CandidateParameter("share_curvature", "-", -0.2, 0.2, 0.0),
+        CandidateParameter("share_curvature", "-", -0.2, 0.2, 0.0, absent=0.0),
     )
 
     def fill(self, draft: Draft, theta: FloatArray, context: Context) -> None:
