@@ -566,12 +566,7 @@ def summarise(
         pairs=tuple(hypothesis(h) for h in pairs),
         baseline_channel_nrmse=dict(baseline.held_out_nrmse),
         pairs_ruled_out=tuple(sorted(pairs_ruled_out)),
-        not_alone={
-            h.effects[0]: finding
-            for h in singles
-            for member, own in own_columns([candidate(h.effects[0])], h.theta)
-            if (finding := member.not_alone(own)) is not None
-        },
+        not_alone={h.effects[0]: why for h in singles if (why := _not_alone(h)) is not None},
         form_gain=max((form_gains or {}).values(), default=1.0),
         form_gains=dict(form_gains or {}),
     )
@@ -823,6 +818,14 @@ def _plausible(fit: Fit) -> bool:
     """Every effect's fitted parameters describe that physics (see Candidate.plausible)."""
     members = [candidate(name) for name in fit.effects]
     return all(member.plausible(own) for member, own in own_columns(members, fit.theta))
+
+
+def _not_alone(fit: Fit) -> str | None:
+    """Why a single's fitted values say it is likely not alone (Candidate.not_alone)."""
+    if len(fit.effects) != 1:
+        return None
+    member, own = next(own_columns([candidate(fit.effects[0])], fit.theta))
+    return member.not_alone(own)
 
 
 def _explain(

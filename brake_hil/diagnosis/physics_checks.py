@@ -223,7 +223,8 @@ def rival_check(model: Model, hypothesis: Fit) -> CheckOutcome:
                 continue
             values = list(own_columns(replaced, fitted.theta))[index][1]
             apart = fitted.held_out_cost / max(hypothesis.held_out_cost, 1e-300)
-            if rival.holds(values) and apart < rival.told_apart:
+            holds = rival.holds(values)
+            if holds and apart < rival.told_apart:
                 lower = "" if rival.told_apart == 1.0 else f"{rival.told_apart:g} times "
                 return CheckOutcome(
                     "rivals",
@@ -232,7 +233,7 @@ def rival_check(model: Model, hypothesis: Fit) -> CheckOutcome:
                     f"{apart:.2f} times {member.name}'s, which would have to be {lower}lower "
                     f"to tell them apart; {rival.why}",
                 )
-            unlike = "" if rival.holds(values) else f", {rival.unlike}"
+            unlike = "" if holds else f", {rival.unlike}"
             told.append(
                 f"{rival.in_words(values)}{unlike}: held-out error {apart:.2f} times "
                 f"{member.name}'s"
