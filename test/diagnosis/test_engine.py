@@ -191,3 +191,36 @@ def test_leading_every_output_undoes_an_input_acquired_late_through_its_filter()
     assert np.max(np.abs(advanced[0, 0, inside] - on_time[inside])) > np.max(
         np.abs(led[0, 0, inside] - on_time[inside])
     )
+
+
+def test_stacked_exponentials_are_scipys_one_by_one(default_rig: Rig) -> None:
+    """The schedule tables' batched expm agrees with scipy's on real and random blocks.
+
+    Real: the discretisation blocks of the seed rig's plant, plain and with a creeping hose
+    node (norms in the thousands: many squarings); random: 1-norms from 0.01 to 100 (no
+    squaring to seven).
+    """
+    import scipy.linalg
+
+    from brake_hil.diagnosis.engine.plant import discretize_stack, expm_stack
+
+    params = derive_parameters(default_rig, 1.08e6)
+    plants = [
+        build_plant(params, Coupling(line_factor=f, stiffness_factor=2.0 - f))
+        for f in (0.5, 1.0, 1.5)
+    ]
+    hose = Coupling(
+        hose_compliance=0.5 * params.bore_compliance,
+        hose_creep_compliance=0.2 * params.bore_compliance,
+    )
+    plants_with_hose = [build_plant(params, hose)] * 2
+    for stack in (plants, plants_with_hose):
+        phi = discretize_stack(stack, 1e-3)[0]
+        for plant, table in zip(stack, phi):
+            exact = scipy.linalg.expm(plant.A * 1e-3)
+            assert np.max(np.abs(table - exact)) < 1e-9 * np.max(np.abs(exact))
+    rng = np.random.default_rng(7)
+    blocks = rng.normal(size=(64, 9, 9)) * rng.uniform(0.003, 12.0, size=(64, 1, 1))
+    exact = np.array([scipy.linalg.expm(b) for b in blocks])
+    scale = np.max(np.abs(exact), axis=(1, 2))
+    assert np.all(np.max(np.abs(expm_stack(blocks) - exact), axis=(1, 2)) < 1e-11 * scale)

@@ -13,10 +13,10 @@ import numpy as np
 from brake_hil.diagnosis.engine.plant import (
     INPUTS,
     Coupling,
-    Discrete,
     Plant,
     build_plant,
     discretize,
+    discretize_stack,
 )
 from brake_hil.diagnosis.engine.terms import Entry, ModelSpec, Step
 from brake_hil.physics.lti_model import DiscreteModel, simulate
@@ -55,24 +55,15 @@ def _tables(
     modes: list[Modes],
 ) -> _Tables:
     """Transition matrices of set ``row`` over time blocks, pressure levels and modes."""
-    entries: list[list[list[Discrete]]] = []
-    start: Plant | None = None
-    for block in range(blocks):
-        time = (block + 0.5) * block_s
-        levels = []
-        for pressure in pressures:
-            by_mode = []
-            for mode in modes:
-                plant = _plant(spec, row, float(pressure), time, mode)
-                start = start or plant
-                by_mode.append(discretize(plant, h))
-            levels.append(by_mode)
-        entries.append(levels)
-    assert start is not None
-    stacked = [
-        np.array([[[m[j] for m in lvl] for lvl in levels] for levels in entries]) for j in range(4)
+    plants = [
+        _plant(spec, row, float(pressure), (block + 0.5) * block_s, mode)
+        for block in range(blocks)
+        for pressure in pressures
+        for mode in modes
     ]
-    return _Tables(stacked[0], stacked[1], stacked[2], stacked[3], start)
+    shape = (blocks, len(pressures), len(modes))
+    phi, g_prev, g_now, g_w = (m.reshape(shape + m.shape[1:]) for m in discretize_stack(plants, h))
+    return _Tables(phi, g_prev, g_now, g_w, plants[0])
 
 
 def _simulate_linear(spec: ModelSpec, u: FloatArray, sample_time: float) -> FloatArray:
