@@ -38,32 +38,37 @@ def _plant(spec: ModelSpec, row: int, pressure: float, time: float, modes: Modes
 
 @dataclass(frozen=True)
 class _Tables:
-    phi: FloatArray  # (T, L, M, n, n)
-    g_prev: FloatArray  # (T, L, M, n)
-    g_now: FloatArray  # (T, L, M, n)
-    g_w: FloatArray  # (T, L, M, n, INPUTS)
-    plant: Plant  # the plant at the start (block 0, gauge zero, every term in mode 0)
+    phi: FloatArray  # (B, T, L, M, n, n)
+    g_prev: FloatArray  # (B, T, L, M, n)
+    g_now: FloatArray  # (B, T, L, M, n)
+    g_w: FloatArray  # (B, T, L, M, n, INPUTS)
+    plants: list[Plant]  # each set's plant at the start (block 0, gauge zero, modes 0)
 
 
 def _tables(
     spec: ModelSpec,
-    row: int,
     pressures: FloatArray,
+    first_blocks: IndexArray,
     blocks: int,
     block_s: float,
     h: float,
     modes: list[Modes],
 ) -> _Tables:
-    """Transition matrices of set ``row`` over time blocks, pressure levels and modes."""
+    """Transition matrices of every set over pressure levels, modes and time blocks.
+
+    ``blocks`` blocks from each set's own first (``first_blocks``, one per set).
+    """
     plants = [
         _plant(spec, row, float(pressure), (block + 0.5) * block_s, mode)
-        for block in range(blocks)
+        for row, first in enumerate(first_blocks.tolist())
+        for block in range(first, first + blocks)
         for pressure in pressures
         for mode in modes
     ]
-    shape = (blocks, len(pressures), len(modes))
+    shape = (spec.batch, blocks, len(pressures), len(modes))
     phi, g_prev, g_now, g_w = (m.reshape(shape + m.shape[1:]) for m in discretize_stack(plants, h))
-    return _Tables(phi, g_prev, g_now, g_w, plants[0])
+    per_set = blocks * len(pressures) * len(modes)
+    return _Tables(phi, g_prev, g_now, g_w, plants[::per_set])
 
 
 def _simulate_linear(spec: ModelSpec, u: FloatArray, sample_time: float) -> FloatArray:
@@ -136,34 +141,34 @@ class Integrator:
         )
         latest = float(np.max(start_time))
         self.blocks = int(np.ceil((latest + duration) / block_s)) + 1 if self.on_time else 1
+        # Each set's table covers the blocks its own stretch of time reaches, no more (the
+        # windows of a recording run as one batch, each from its own start).
+        starts = np.broadcast_to(np.asarray(start_time, dtype=float), (spec.batch,))
+        self.first_block: IndexArray = (
+            np.minimum((starts / block_s).astype(np.intp), self.blocks - 1)
+            if self.on_time
+            else np.zeros(spec.batch, dtype=np.intp)
+        )
+        own_blocks = min(int(np.ceil(duration / block_s)) + 1, self.blocks) if self.on_time else 1
         modes = list(itertools.product(*(range(t.modes) for t in terms)))
-        tables = [
-            _tables(spec, b, self.grid, self.blocks, block_s, sample_time, modes)
-            for b in range(spec.batch)
-        ]
-        phi = np.stack([t.phi for t in tables])  # (B, T, L, M, n, n)
+        tables = _tables(
+            spec, self.grid, self.first_block, own_blocks, block_s, sample_time, modes
+        )
         # One matrix per schedule entry acting on [z, previous p_i, p_i, explicit inputs]:
         # a step is one batched product, its entry one flat index per set.
         system = np.concatenate(
-            [
-                phi,
-                np.stack([t.g_prev for t in tables])[..., None],
-                np.stack([t.g_now for t in tables])[..., None],
-                np.stack([t.g_w for t in tables]),
-            ],
+            [tables.phi, tables.g_prev[..., None], tables.g_now[..., None], tables.g_w],
             axis=-1,
         )
-        n = phi.shape[-1]
-        self.entries_per_block = phi.shape[2] * phi.shape[3]  # L * M
-        self.modes_per_level = phi.shape[3]
+        n = tables.phi.shape[-1]
+        self.entries_per_block = tables.phi.shape[2] * tables.phi.shape[3]  # L * M
+        self.modes_per_level = tables.phi.shape[3]
         self.system = np.ascontiguousarray(system.reshape(spec.batch, -1, n, system.shape[-1]))
-        self.out_c = np.stack([t.plant.C for t in tables])
-        self.z = np.stack(
-            [-np.linalg.solve(t.plant.A, t.plant.B * p) for t, p in zip(tables, first)]
-        )
+        self.out_c = np.stack([plant.C for plant in tables.plants])
+        self.z = np.stack([-np.linalg.solve(t.A, t.B * p) for t, p in zip(tables.plants, first)])
         self.drive = np.zeros((spec.batch, system.shape[-1], 1))  # [z, p_prev, p, explicit]
         self.states = n
-        self.scale, self.index = tables[0].plant.scale, tables[0].plant.index
+        self.scale, self.index = tables.plants[0].scale, tables.plants[0].index
         self.si = self.z * self.scale  # the states in SI units
         self.rows = np.arange(spec.batch)
         self.level: IndexArray = np.zeros(spec.batch, dtype=np.intp)
@@ -209,10 +214,12 @@ class Integrator:
         block: IndexArray | int = 0
         if self.on_time:
             now = self.start_time + self.step_index * self.sample_time
+            # each set's own table starts at its first block
             if isinstance(now, np.ndarray):
                 block = np.minimum((now / self.block_s).astype(np.intp), self.blocks - 1)
-            else:
-                block = min(int(now / self.block_s), self.blocks - 1)
+                block = block - self.first_block
+            else:  # one start for every set
+                block = min(int(now / self.block_s), self.blocks - 1) - int(self.first_block[0])
         if self.on_pressure:
             p_b = self.value("p_b")
             self.level = np.clip(np.searchsorted(self.grid, p_b), 0, self.levels - 1)
