@@ -210,6 +210,11 @@ class Integrator:
 
         Inputs in Pa, linear between them: one for every set, or one per set (B,).
         """
+        self.step(previous_pressure, pressure)
+        return self.outputs()
+
+    def step(self, previous_pressure: float | FloatArray, pressure: float | FloatArray) -> None:
+        """:meth:`advance` without the outputs (a batch reads them off the states at the end)."""
         self.step_index += 1
         block: IndexArray | int = 0
         if self.on_time:
@@ -222,7 +227,7 @@ class Integrator:
                 block = min(int(now / self.block_s), self.blocks - 1) - int(self.first_block[0])
         if self.on_pressure:
             p_b = self.value("p_b")
-            self.level = np.clip(np.searchsorted(self.grid, p_b), 0, self.levels - 1)
+            self.level = np.minimum(np.searchsorted(self.grid, p_b), self.levels - 1)
         explicit = self.explicit
         explicit[:] = 0.0
         for step in self.steps:
@@ -246,7 +251,6 @@ class Integrator:
         self.si = self.z * self.scale
         for step in self.steps:
             step.update(self)
-        return self.outputs()
 
 
 def simulate_batch(
@@ -282,9 +286,11 @@ def simulate_batch(
         block_s,
         start_time if np.ndim(start_time) == 0 else np.asarray(start_time, dtype=float),
     )
-    out = np.empty((spec.batch, 3, samples))
-    out[:, :, 0] = integrator.outputs()
+    states = np.empty((samples, spec.batch, integrator.states))
+    states[0] = integrator.z
     columns = u.T if u.ndim == 2 else u
     for k in range(1, samples):
-        out[:, :, k] = integrator.advance(columns[k - 1], columns[k])
+        integrator.step(columns[k - 1], columns[k])
+        states[k] = integrator.z
+    out = np.einsum("boj,kbj->bok", integrator.out_c, states)
     return _transform(spec, out, sample_time)
