@@ -8,9 +8,11 @@ import json
 import numpy as np
 import pytest
 
+from brake_hil.analysis.signals import lowpass
 from brake_hil.diagnosis import diagnose as diagnosis
 from brake_hil.diagnosis.dataset import Dataset, Window
 from brake_hil.diagnosis.diagnose import Hypothesis, Summary, decide
+from brake_hil.topics import OUTPUT_CHANNELS
 
 BASE = 1.0e-5  # held-out cost of the baseline (NRMSE 0.3 %)
 
@@ -101,15 +103,21 @@ def test_the_summary_replays_through_json() -> None:
     assert decide(again) == decide(original)
 
 
-def test_noise_floor_is_the_cycle_to_cycle_variance() -> None:
-    rate, period = 500.0, 0.2
+@pytest.mark.parametrize("excitation_hz", [5.0, 8.0, 7.0, 3.0])
+def test_noise_floor_is_the_cycle_to_cycle_variance(excitation_hz: float) -> None:
+    """Whole samples per period (5 Hz at 500 Hz) or not (8 Hz: 62.5, 7 Hz: 71.4, 3 Hz).
+
+    A pulsing with harmonics and noise, both low-passed as the diagnosis conditions them;
+    the estimate must be the noise's variance, not the signal's change over a part sample.
+    """
+    rate, period = 500.0, 1.0 / excitation_hz
     time = np.arange(0.0, 6.0, 1.0 / rate)
     rng = np.random.default_rng(1)
-    noise = 0.01
-    measured = {
-        key: np.sin(2 * np.pi * time / period) + rng.normal(0.0, noise, time.size)
-        for key in ("p_b", "F_k", "x_c")
-    }
+    phase = 2 * np.pi * time / period
+    pulsing = np.sin(phase) + 0.3 * np.sin(3 * phase) + 0.1 * np.sin(5 * phase)
+    inside = (time >= 1.0) & (time < 5.0)
+    noises = {key: lowpass(rng.normal(0.0, 0.01, time.size), rate) for key in OUTPUT_CHANNELS}
+    measured = {key: lowpass(pulsing, rate) + noise for key, noise in noises.items()}
     window = Window(1.0, 5.0, 1.0e6, 0)
     dataset = Dataset(
         name="synthetic",
@@ -122,8 +130,10 @@ def test_noise_floor_is_the_cycle_to_cycle_variance() -> None:
         period=period,
         sample_time=1.0 / rate,
     )
-    scale = np.mean([np.ptp(v[(time >= 1.0) & (time < 5.0)]) for v in measured.values()])
-    assert dataset.noise_cost() == pytest.approx((noise / scale) ** 2, rel=0.1)
+    expected = np.mean(
+        [np.var(noises[key][inside]) / np.ptp(measured[key][inside]) ** 2 for key in noises]
+    )
+    assert dataset.noise_cost() == pytest.approx(expected, rel=0.15)
 
 
 def test_a_stand_in_is_set_aside_and_the_verdict_leans_to_unexplained() -> None:
