@@ -15,7 +15,13 @@ from typing import Any
 
 from brake_hil.app.parallel import SERIAL, Outcome, Workers, parallel_map, values
 from brake_hil.errors import BrakeHilError
-from brake_hil.virtual_rig.cases import make_case, select_cases, write_labels
+from brake_hil.virtual_rig.cases import (
+    SEED_DRIVE,
+    CaseDrive,
+    make_case,
+    select_cases,
+    write_labels,
+)
 
 __all__ = ["CasesResult", "generate_cases", "run_cases"]
 
@@ -30,6 +36,7 @@ def generate_cases(
     error_scale: float = 1.0,
     kinds: Sequence[str] = (),
     family: str = "a",
+    drive: CaseDrive = SEED_DRIVE,
     progress: Callable[[int, int, int], None] | None = None,
 ) -> Path:
     """Write ``count`` labelled cases under ``out``; return the path of ``labels.json``.
@@ -46,6 +53,7 @@ def generate_cases(
             in the full schedule; ``count`` is then the number kept.
         family: the family of truth laws (``a``, the registered laws, or ``b``; see
             :mod:`brake_hil.virtual_rig.cases`).
+        drive: the pulsing frequency and maximum pressures (default: the seed's).
         progress: called with the number of cases written, failed and in all: once before
             the first is simulated, then as each finishes (in the order they finish).
 
@@ -73,7 +81,7 @@ def generate_cases(
 
     if progress is not None:
         progress(0, 0, len(specs))
-    simulate = partial(make_case, cases_dir=cases_dir, pulsing_s=pulsing_s)
+    simulate = partial(make_case, cases_dir=cases_dir, pulsing_s=pulsing_s, drive=drive)
     made = values(parallel_map(simulate, specs, workers, report))
     labels = {spec.case_id: label for spec, label in zip(specs, made)}
     return write_labels(
@@ -85,6 +93,7 @@ def generate_cases(
         error_scale=error_scale,
         kinds=kinds,
         family=family,
+        drive=drive,
     )
 
 
@@ -107,6 +116,7 @@ def run_cases(
     error_scale: float = 1.0,
     kinds: Sequence[str] = (),
     family: str = "a",
+    drive: CaseDrive = SEED_DRIVE,
     progress: Callable[[int, int, int], None] | None = None,
 ) -> CasesResult:
     """``brake-hil cases``: check the options, then :func:`generate_cases`.
@@ -120,6 +130,8 @@ def run_cases(
         error_scale: multiplies the one-sigma tolerances of the parameter errors.
         kinds: keep only cases of these kinds (empty: every kind).
         family: the family of truth laws, ``a`` or ``b``.
+        drive: the pulsing frequency (0.5-20 Hz) and maximum pressures (2-5 of them,
+            increasing, 0.3-10 MPa); default: the seed's.
         progress: called with the cases written, failed and in all (see
             :func:`generate_cases`).
 
@@ -131,6 +143,18 @@ def run_cases(
     """
     if count < 1 or pulsing_s <= 0.0:
         raise BrakeHilError("cases: --count must be >= 1, --pulsing-seconds > 0")
+    hz, pressures = drive.excitation_hz, drive.max_pressures
+    if hz is not None and not 0.5 <= hz <= 20.0:
+        raise BrakeHilError(f"cases: --excitation-hz {hz:g} is outside 0.5-20 Hz")
+    if not (
+        2 <= len(pressures) <= 5
+        and all(0.3e6 <= p <= 10e6 for p in pressures)
+        and all(b > a for a, b in zip(pressures, pressures[1:]))
+    ):
+        shown = ",".join(f"{p / 1e6:g}" for p in pressures)
+        raise BrakeHilError(
+            f"cases: --max-pressures {shown}: give 2-5 increasing pressures of 0.3-10 MPa"
+        )
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise BrakeHilError(f"{out}: not empty; choose a new directory for the cases")
     labels = generate_cases(
@@ -142,6 +166,7 @@ def run_cases(
         error_scale=error_scale,
         kinds=kinds,
         family=family,
+        drive=drive,
         progress=progress,
     )
     return CasesResult(count, out / "cases", labels)

@@ -26,6 +26,7 @@ if TYPE_CHECKING:
     from brake_hil.app.parallel import Outcome
     from brake_hil.app.recover import RecoverResult
     from brake_hil.app.regress import MetricCheck, ReplayResult
+    from brake_hil.virtual_rig.cases import CaseDrive
 
 __all__ = [
     "benchmark",
@@ -287,10 +288,20 @@ def cases(args: argparse.Namespace) -> int:
             error_scale=args.error_scale,
             kinds=tuple(args.kind),
             family=args.family,
+            drive=case_drive(args),
             progress=progress,
         )
     print(f"wrote {result.count} cases under {result.cases_dir}; labels in {result.labels_path}")
     return 0
+
+
+def case_drive(args: argparse.Namespace) -> CaseDrive:
+    """The cases' drive from ``--excitation-hz`` and ``--max-pressures`` (the seed's)."""
+    from brake_hil.virtual_rig.cases import CaseDrive
+
+    if args.max_pressures is None:
+        return CaseDrive(args.excitation_hz)
+    return CaseDrive(args.excitation_hz, args.max_pressures)
 
 
 def fleet(args: argparse.Namespace) -> int:

@@ -265,6 +265,19 @@ def _add_cases_parser(commands: argparse._SubParsersAction) -> None:  # type: ig
         help="family of truth laws: a (the registered laws, default) or b (a second, "
         "structurally different law per effect and its own measurement chain)",
     )
+    cases.add_argument(
+        "--excitation-hz",
+        type=float,
+        default=None,
+        help="pulsing frequency of every case (default: the nominal rig's, 5 Hz)",
+    )
+    cases.add_argument(
+        "--max-pressures",
+        type=_megapascals,
+        default=None,
+        metavar="MPA,MPA,...",
+        help="one steady segment per maximum pressure (default: the seed's 1.38,2.07,2.76)",
+    )
 
 
 def uses_virtual_rig(args: argparse.Namespace) -> bool:
@@ -278,3 +291,13 @@ def uses_virtual_rig(args: argparse.Namespace) -> bool:
         options = ", ".join("--" + name.replace("_", "-") for name in given)
         raise BrakeHilError(f"{options} need the virtual rig; drop --engine lti")
     return args.engine == "virtual" or bool(given)
+
+
+def _megapascals(text: str) -> tuple[float, ...]:
+    """``--max-pressures``: comma-separated MPa, in Pa."""
+    try:
+        return tuple(float(part) * 1e6 for part in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: give comma-separated pressures in MPa, e.g. 1.0,1.8,2.5"
+        ) from None

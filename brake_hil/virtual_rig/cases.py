@@ -37,6 +37,7 @@ values 30 %, ``fluid.air_fraction`` 100 %, the rest 10 %, one sigma) and clipped
 from __future__ import annotations
 
 from collections.abc import Iterator, Mapping, Sequence
+import dataclasses
 from dataclasses import dataclass, field
 import json
 from pathlib import Path
@@ -161,6 +162,35 @@ class CaseSpec:
     def case_id(self) -> str:
         """Folder name of the case (``000``, ``001``, ...)."""
         return f"{self.number:03d}"
+
+
+@dataclass(frozen=True)
+class CaseDrive:
+    """How every case of a set is driven: the seed's pulsing unless told otherwise.
+
+    Another frequency or other pressures test the diagnosis on an excitation it was not
+    tuned on (an independent simulator's rig may pulse at 8 Hz, to 2.5 MPa).
+    """
+
+    excitation_hz: float | None = None  # Hz, the pulsing (None: the nominal rig's, 5 Hz)
+    max_pressures: tuple[float, ...] = SEED_MAX_PRESSURES  # Pa, one steady segment each
+
+    def nominal(self, rig: Rig) -> Rig:
+        """The nominal rig as the case's ``rig.yaml`` describes it: pulsing at this drive's."""
+        if self.excitation_hz is None:
+            return rig
+        return dataclasses.replace(rig, excitation_hz=self.excitation_hz)
+
+    def as_dict(self, rig_hz: float) -> dict[str, Any]:
+        """The drive for ``labels.json`` (``rig_hz``: the nominal rig's pulsing, Hz)."""
+        return {
+            "excitation_hz": rig_hz if self.excitation_hz is None else self.excitation_hz,
+            "max_pressures_mpa": [round(p / 1e6, 6) for p in self.max_pressures],
+        }
+
+
+SEED_DRIVE = CaseDrive()
+"""The seed's drive: the nominal rig's 5 Hz pulsing to 1.38, 2.07 and 2.76 MPa."""
 
 
 def _check_family(family: str) -> None:
@@ -321,13 +351,21 @@ def select_cases(
     return [spec for spec in specs if spec.kind in kinds][:count]
 
 
-def case_excitation(spec: CaseSpec, truth: Rig, pulsing_s: float) -> Excitation:
-    """The seed's three segments (1.38, 2.07, 2.76 MPa), solenoid-driven or as ``p_i``."""
+def case_excitation(
+    spec: CaseSpec,
+    truth: Rig,
+    pulsing_s: float,
+    max_pressures: Sequence[float] = SEED_MAX_PRESSURES,
+) -> Excitation:
+    """Pulsing at ``truth``'s frequency, solenoid-driven or as ``p_i``.
+
+    One segment per maximum pressure (Pa): the seed's 1.38, 2.07, 2.76 MPa by default.
+    """
     if spec.air_driven:
         return solenoid_pulsing(
-            truth, SEED_MAX_PRESSURES, pulsing_s=pulsing_s, pulsing_hz=truth.excitation_hz
+            truth, max_pressures, pulsing_s=pulsing_s, pulsing_hz=truth.excitation_hz
         )
-    return seed_pulsing(SEED_MAX_PRESSURES, pulsing_s=pulsing_s, pulsing_hz=truth.excitation_hz)
+    return seed_pulsing(max_pressures, pulsing_s=pulsing_s, pulsing_hz=truth.excitation_hz)
 
 
 def measurement_chain(spec: CaseSpec) -> tuple[Effect, ...]:
@@ -364,11 +402,13 @@ def label(spec: CaseSpec, truth: Rig, excitation: Excitation) -> dict[str, Any]:
     return result
 
 
-def make_case(spec: CaseSpec, cases_dir: Path, pulsing_s: float) -> dict[str, Any]:
+def make_case(
+    spec: CaseSpec, cases_dir: Path, pulsing_s: float, drive: CaseDrive = SEED_DRIVE
+) -> dict[str, Any]:
     """Simulate and write one case; return its label."""
-    nominal = nominal_rigs()[spec.nominal_key]
+    nominal = drive.nominal(nominal_rigs()[spec.nominal_key])
     truth = truth_rig(nominal, spec.parameter_errors, f"truth of case {spec.case_id}")
-    excitation = case_excitation(spec, truth, pulsing_s)
+    excitation = case_excitation(spec, truth, pulsing_s, drive.max_pressures)
     effects = (*spec.effects, *measurement_chain(spec))
     run = simulate_rig(truth, effects, excitation, seed=spec.noise_seed)
     folder = cases_dir / spec.case_id
@@ -390,6 +430,7 @@ def write_labels(
     error_scale: float,
     kinds: Sequence[str],
     family: str = "a",
+    drive: CaseDrive = SEED_DRIVE,
 ) -> Path:
     """Write ``out/labels.json``: how the cases were made and each case's label.
 
@@ -402,6 +443,7 @@ def write_labels(
         error_scale: the parameter errors' scale of the rig tolerances.
         kinds: the kinds kept (empty: every kind).
         family: the family of truth laws the cases were made of.
+        drive: how the cases were driven (pulsing frequency, maximum pressures).
 
     Returns:
         The path of ``labels.json``.
@@ -415,6 +457,7 @@ def write_labels(
             "error_scale": error_scale,
             "kinds": list(kinds),
             "family": family,
+            **drive.as_dict(next(iter(nominal_rigs().values())).excitation_hz),
             "layout": "cases/NNN/recording (rosbag2 MCAP) + cases/NNN/rig.yaml (nominal)",
         },
         "cases": dict(sorted(labels.items())),

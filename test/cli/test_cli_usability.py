@@ -129,3 +129,22 @@ def test_benchmark_of_one_null_case_shows_progress_and_n_a_for_empty_categories(
     assert "n/a" in single and "of 0 cases" in single
     assert "benchmark:" in done.stderr and "1/1" in done.stderr  # progress, on stderr
     assert "\r" not in done.stderr
+
+
+@pytest.mark.parametrize(
+    ("options", "fragment"),
+    [
+        (["--excitation-hz", "50"], "outside 0.5-20 Hz"),
+        (["--max-pressures", "2.0,1.0"], "2-5 increasing pressures"),
+        (["--max-pressures", "1.5"], "2-5 increasing pressures"),
+        (["--max-pressures", "1,x"], "comma-separated pressures in MPa"),
+    ],
+)
+def test_cases_refuse_a_drive_out_of_range_with_exit_2_and_nothing_written(
+    tmp_path: Path, options: list[str], fragment: str
+) -> None:
+    out = tmp_path / "set"
+    done = _run("-m", "brake_hil.cli", "cases", "--out", str(out), "--count", "1", *options)
+    assert done.returncode == 2
+    assert fragment in done.stderr
+    assert not out.exists()

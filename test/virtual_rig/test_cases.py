@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from brake_hil.app.cases import generate_cases
@@ -13,8 +14,10 @@ from brake_hil.physics.rig import load_rig
 from brake_hil.virtual_rig import EFFECTS
 from brake_hil.virtual_rig.cases import (
     PERTURBED_KEYS,
+    SEED_DRIVE,
     STRONG_STRENGTHS,
     SUBTLE_STRENGTHS,
+    CaseDrive,
     case_excitation,
     label,
     nominal_rigs,
@@ -94,6 +97,31 @@ def test_generated_cases_keep_their_labels_apart(tmp_path: Path) -> None:
     assert labels["000"]["kind"] == "null" and labels["000"]["expected_effects"] == []
     with pytest.raises(FileExistsError):
         generate_cases(tmp_path / "bench", 1, seed=4, pulsing_s=0.4)
+
+
+def test_a_set_driven_at_another_frequency_and_pressures(tmp_path: Path) -> None:
+    """``--excitation-hz 8 --max-pressures 1.0,1.8``.
+
+    The rig file, the labels and the recording all pulse at 8 Hz, one segment per pressure.
+    """
+    drive = CaseDrive(8.0, (1.0e6, 1.8e6))
+    labels_path = generate_cases(tmp_path / "bench", 1, seed=4, pulsing_s=2.0, drive=drive)
+    document = json.loads(labels_path.read_text())
+    assert document["generator"]["excitation_hz"] == 8.0
+    assert document["generator"]["max_pressures_mpa"] == [1.0, 1.8]
+    folder = tmp_path / "bench" / "cases" / "000"
+    assert load_rig(folder / "rig.yaml").excitation_hz == 8.0
+    recording = read_recording(folder / "recording")
+    pressure = recording.master_cylinder_pressure
+    steady = pressure[recording.time > recording.time[-1] - 1.5]  # in the last segment
+    spectrum = np.abs(np.fft.rfft(steady - steady.mean()))
+    frequencies = np.fft.rfftfreq(steady.size, 1.0 / recording.sample_rate)
+    assert frequencies[np.argmax(spectrum)] == pytest.approx(8.0, abs=0.7)
+    assert np.max(pressure) == pytest.approx(1.8e6, rel=0.1)
+    assert SEED_DRIVE.as_dict(5.0) == {
+        "excitation_hz": 5.0,
+        "max_pressures_mpa": [1.38, 2.07, 2.76],
+    }
 
 
 def test_an_out_of_library_case_is_labelled_unexplained() -> None:
