@@ -779,9 +779,16 @@ def decide(summary: Summary) -> Verdict:
             if any(chosen.effects[0] in p for p in summary.pairs_ruled_out):
                 # a pair left unfitted: the worst its fit could do (an error of zero)
                 margins.append(math.log(PAIR_SHARE * base / max(chosen.held_out_cost, 1e-30)))
-        else:  # how far the pair clears its better single
+        else:  # how far the pair clears its better single, and its siblings
             alone = max(log_gains.get((e,), 0.0) for e in chosen.effects)
             margins.append(own - alone - math.log(PAIR_RATIO))
+            # a pair that keeps one of its effects and swaps the other: which second effect
+            siblings = [
+                g
+                for effects, g in log_gains.items()
+                if len(effects) == 2 and len(set(effects) & set(chosen.effects)) == 1
+            ]
+            margins += [own - max(siblings)] if siblings else []
         least = min(margins + cap)
         return Verdict(chosen.effects, _confidence(least), chosen.effects, least)
     # Unexplained (rather than none) when the misfit is large, or structured: a generic form

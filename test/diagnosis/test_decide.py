@@ -332,3 +332,22 @@ def test_a_generic_form_that_is_the_effects_own_physics_does_not_count_against_i
     # the per-form gains are replayed from JSON
     again = Summary.from_dict(json.loads(json.dumps(kin.as_dict())))
     assert again == kin and decide(again) == decide(kin)
+
+
+def test_a_pair_is_no_surer_than_its_second_effect_is_told_from_another() -> None:
+    """Seed 1201 (family a): eccentric load + hose named eccentric load + sensor delay at
+    0.98, the pair with the hose 3 times behind. A pair that keeps one effect and swaps the
+    other is a rival of the second effect's identity: the nearer it comes, the less sure."""
+    eccentric, delay = single("eccentric_load", BASE / 14), single("sensor_delay", BASE / 1.3)
+    hose = single("hose_compliance", BASE / 1.2)
+    named = pair("eccentric_load", "sensor_delay", BASE / 1000)
+    alone = decide(summary(eccentric, delay, hose, named))
+    assert set(alone.effects) == {"eccentric_load", "sensor_delay"} and alone.confidence > 0.9
+    for sibling_gain, at_most in ((330.0, 0.9), (900.0, 0.75)):
+        sibling = pair("eccentric_load", "hose_compliance", BASE / sibling_gain)
+        verdict = decide(summary(eccentric, delay, hose, named, sibling))
+        assert verdict.effects == alone.effects and verdict.confidence < at_most
+    # a pair that shares no effect is a rival already (as before); a far sibling changes
+    # nothing
+    far = pair("eccentric_load", "hose_compliance", BASE / 20)
+    assert decide(summary(eccentric, delay, hose, named, far)).confidence == alone.confidence
