@@ -51,7 +51,7 @@ NOISE_EXCESS = 8.0
 """No effect is named while the baseline's held-out error is under this many times the noise's
 share of it: what is left is within a few noise variances, and a candidate that halves it is
 fitting the residue of a parameter error (measured: nulls 2-6x, the weakest real effects
-10x and more)."""
+10x and more), except a weak single that explains it all (``WEAK_SINGLE_RATIO``)."""
 WEAK_SINGLE_RATIO = 3.0
 """Under ``NOISE_EXCESS`` one effect is still named when it alone cuts the held-out error this
 many times ...
