@@ -347,7 +347,6 @@ def test_a_pair_is_no_surer_than_its_second_effect_is_told_from_another() -> Non
         sibling = pair("eccentric_load", "hose_compliance", BASE / sibling_gain)
         verdict = decide(summary(eccentric, delay, hose, named, sibling))
         assert verdict.effects == alone.effects and verdict.confidence < at_most
-    # a pair that shares no effect is a rival already (as before); a far sibling changes
-    # nothing
+    # a sibling far behind changes nothing
     far = pair("eccentric_load", "hose_compliance", BASE / 20)
     assert decide(summary(eccentric, delay, hose, named, far)).confidence == alone.confidence
