@@ -732,7 +732,7 @@ def decide(summary: Summary) -> Verdict:
     if summary.excess_ratio < NOISE_EXCESS:
         weak = weak_single(summary)
         if weak is not None:
-            return Verdict(weak.effects, _confidence(weak.margin), weak.effects, weak.margin)
+            return weak
         margin = math.log(NOISE_EXCESS / max(summary.excess_ratio, 1e-9))
         return Verdict((), _confidence(margin), None, margin)
     required = required_ratio(summary)
@@ -809,16 +809,10 @@ def decide(summary: Summary) -> Verdict:
     return Verdict(("unexplained",) if unexplained else (), _confidence(margin), None, margin)
 
 
-@dataclass(frozen=True)
-class WeakSingle:
-    """A single named under the noise floor (:func:`weak_single`) and its decision margin."""
+def weak_single(summary: Summary) -> Verdict | None:
+    """The verdict naming the one effect that explains a misfit under the floor, or None.
 
-    effects: tuple[str, ...]
-    margin: float  # log units: the least of its distances from the rule's thresholds
-
-
-def weak_single(summary: Summary) -> WeakSingle | None:
-    """The one effect that explains a misfit under ``NOISE_EXCESS`` times the noise, or None.
+    Its margin is the least of its distances from the rule's thresholds (log units).
 
     A weak effect (a little air, a slightly soft hose) leaves a misfit of a few noise
     variances, as a parameter error does; but a parameter error's residue is cut at most
@@ -847,7 +841,7 @@ def weak_single(summary: Summary) -> WeakSingle | None:
         ),
     ]
     least = min(margins)
-    return WeakSingle(best.effects, least) if least >= 0.0 else None
+    return Verdict(best.effects, _confidence(least), best.effects, least) if least >= 0 else None
 
 
 def identified(summary: Summary, h: Hypothesis) -> bool:
