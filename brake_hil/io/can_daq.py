@@ -628,6 +628,9 @@ def slcan_line(frame: can.Message) -> bytes:
 DRAIN_S = 5.0
 """How long an emulated adapter that closes waits for its reader to read what it sent (s)."""
 
+DRAIN_SETTLE_S = 0.05
+"""How long the reader's queue must stay empty before a closing adapter counts it read (s)."""
+
 
 class SlcanPty:
     r"""The device side of an slcan adapter on a pseudo-terminal pair (for an emulated rig).
@@ -739,10 +742,20 @@ class SlcanPty:
 
         First, for up to ``drain_s``, wait while a reader has frames still to read: closing
         the pseudo-terminal discards them (a reader lagging 18 ms behind on a busy machine
-        lost the last 18 samples of a run).
+        lost the last 18 samples of a run). The queue must stay empty for ``DRAIN_SETTLE_S``:
+        the kernel moves written bytes to the reader's queue on a worker thread, so on a
+        busy machine a frame just written may not show in it yet.
         """
         deadline = time.monotonic() + drain_s
-        while self.reader_open and self.unread() > 0 and time.monotonic() < deadline:
+        drained_since: float | None = None  # when the reader's queue was last seen empty
+        while self.reader_open and time.monotonic() < deadline:
+            now = time.monotonic()
+            if self.unread() > 0:
+                drained_since = None
+            elif drained_since is None:
+                drained_since = now
+            elif now - drained_since >= DRAIN_SETTLE_S:
+                break
             self._answer_commands()
             time.sleep(0.005)
         if self.link_path is not None and self.link_path.is_symlink():

@@ -7,7 +7,7 @@ one runs slcan over a pseudo-terminal pair (:class:`SlcanPty`), which needs pyse
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 import contextlib
 from pathlib import Path
 import threading
@@ -71,6 +71,16 @@ def poll_until(daq: CanDaq, frames: int, timeout_s: float = 2.0) -> list:
     while len(got) < frames and time.monotonic() < deadline:
         got += daq.poll(timeout=0.01)
     return got
+
+
+def wait_until(condition: Callable[[], bool], timeout_s: float) -> bool:
+    """Whether ``condition`` came true within ``timeout_s`` (checked every millisecond)."""
+    deadline = time.monotonic() + timeout_s
+    while not condition():
+        if time.monotonic() >= deadline:
+            return False
+        time.sleep(0.001)
+    return True
 
 
 def test_crc8_matches_the_sae_j1850_check_value() -> None:
@@ -310,7 +320,9 @@ def test_an_emulated_adapter_that_closes_lets_its_reader_read_what_it_sent(
         assert poll_until_open(device, daq)
         for k in range(count):
             assert device.send(codec.encode(k, {q: values[q][k] for q in QUANTITIES}))
-        assert device.unread() > 0  # nothing read yet: the reader is busy elsewhere
+        # nothing read yet: the reader is busy elsewhere (the kernel queues the bytes for the
+        # reader on a worker thread, so on a busy machine they show after a moment)
+        assert wait_until(lambda: device.unread() > 0, timeout_s=5.0)
         closing = threading.Thread(target=device.close, args=(drain_s,))
         closing.start()
         time.sleep(0.3)  # the reader comes back late
