@@ -102,6 +102,14 @@ STAND_IN_MARGIN = 0.0
 set aside by a physics check (:mod:`.physics_checks`), or when a single is named whose own
 fitted values show another physics beside it (``Candidate.not_alone``): confidence at most
 ``_confidence(0)``, about 0.71."""
+HIDDEN_PARTNER_RATIO = 1.4
+"""A single named alone is likely not alone when a pair with it cuts what it leaves this many
+times, the single leaving more than ``NOISE_EXCESS`` times the noise's share (a strong effect
+over a subtle one: the pair explains too little of the baseline's error for ``PAIR_SHARE``,
+so it is not named, but the verdict is no surer than ``STAND_IN_MARGIN`` allows). Measured
+2026-11-27 (seed 1401, probe): the true pair under three of four family b's sure-wrong
+strong singles cut their leftover 1.47-3.45 times; on 16 right sure singles the best pair
+with them cut it 1.00-1.32 times."""
 CHECK_ROUNDS = 3
 """Verdicts checked at most: a verdict that fails is set aside and the next one checked."""
 PAIR_SHORTLIST = 8
@@ -279,10 +287,8 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         baseline, singles, pairs, dataset.noise_cost(), evidence, ruled_out, form_gains
     )
     verdict = decide(summary)
-    chosen_set = set(verdict.chosen or ())
-    if chosen_set and any(not chosen_set & set(p) for p in ruled_out):
-        # An unfitted pair would be a rival of this verdict: fit them after all.
-        say("fitting the pairs left out, as rivals of the verdict")
+    if unfitted_pairs_matter(summary, verdict):
+        say("fitting the pairs left out, as rivals or partners of the verdict")
         pairs = _fit_pairs(calibration, dataset, baseline, singles, unfitted, say)
         summary = summarise(
             baseline, singles, pairs, dataset.noise_cost(), evidence, form_gains=form_gains
@@ -351,7 +357,7 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         )
     doubt = summary.doubt(chosen.effects) if chosen is not None else None
     if doubt is not None:
-        explanation += f" Likely not alone, by its own fitted values: {doubt}."
+        explanation += f" Likely not alone: {doubt}."
     if verdict.effects == ("unexplained",):
         explanation += f" {residual.summary[0].upper()}{residual.summary[1:]}."
     else:  # the description is of the baseline's misfit, which the verdict explains or not
@@ -450,6 +456,24 @@ def unnameable_pairs(baseline: Fit, singles: list[Fit]) -> frozenset[tuple[str, 
     )
 
 
+def unfitted_pairs_matter(summary: Summary, verdict: Verdict) -> bool:
+    """Whether the pairs left unfitted (:attr:`Summary.pairs_ruled_out`) must be fitted.
+
+    One of them would be a rival of the verdict (it shares no effect with it), or the
+    verdict is a single that leaves more than ``NOISE_EXCESS`` times the noise's share and
+    a pair with it may show a second effect under it (:meth:`Summary.hidden_partner`).
+    """
+    chosen = verdict.chosen or ()
+    if any(not set(chosen) & set(p) for p in summary.pairs_ruled_out if chosen):
+        return True
+    single = next((h for h in summary.singles if h.effects == chosen), None)
+    return (
+        single is not None
+        and single.held_out_cost > NOISE_EXCESS * summary.floor_cost
+        and any(chosen[0] in p for p in summary.pairs_ruled_out)
+    )
+
+
 @dataclass(frozen=True)
 class Hypothesis:
     """What the decision needs of one fitted candidate set (numbers only)."""
@@ -492,8 +516,48 @@ class Summary:
         return max((g for key, g in self.form_gains.items() if key not in kin), default=1.0)
 
     def doubt(self, effects: tuple[str, ...]) -> str | None:
-        """Why ``effects``, a single, is likely not alone (:attr:`not_alone`); else None."""
-        return self.not_alone.get(effects[0]) if len(effects) == 1 else None
+        """Why ``effects``, a single, is likely not alone; else None.
+
+        Its own fitted values show another physics beside it (:attr:`not_alone`), or a
+        pair with it cuts what it leaves ``HIDDEN_PARTNER_RATIO`` times while it leaves
+        more than ``NOISE_EXCESS`` times the noise's share (:meth:`hidden_partner`).
+        """
+        if len(effects) != 1:
+            return None
+        if effects[0] in self.not_alone:
+            return self.not_alone[effects[0]]
+        partner = self.hidden_partner(effects[0])
+        if partner is None:
+            return None
+        other, cut = partner
+        return (
+            f"with {other} beside it the fit leaves {cut:.2f} times less of the error than "
+            f"{effects[0]} alone (a second effect, too small a share of the baseline's error "
+            f"to be named: {100 * PAIR_SHARE:g} % is asked)"
+        )
+
+    def hidden_partner(self, name: str) -> tuple[str, float] | None:
+        """The second effect of the best pair with single ``name``, and its cut; or None.
+
+        The cut is how many times the pair cuts the error ``name`` leaves; None unless it is
+        ``HIDDEN_PARTNER_RATIO`` or more. Only for a single that leaves more than
+        ``NOISE_EXCESS`` times the noise's share: under that, no second effect is there to
+        find.
+        """
+        single = next((h for h in self.singles if h.effects == (name,)), None)
+        if single is None or single.held_out_cost <= NOISE_EXCESS * self.floor_cost:
+            return None
+        pairs = [
+            p
+            for p in self.pairs
+            if name in p.effects and p.plausible and "+".join(p.effects) not in self.stand_ins
+        ]
+        best = min(pairs, key=lambda p: p.held_out_cost, default=None)
+        if best is None:
+            return None
+        cut = ratio(single.held_out_cost, best.held_out_cost)
+        other = next(e for e in best.effects if e != name)
+        return (other, cut) if cut >= HIDDEN_PARTNER_RATIO else None
 
     @property
     def floor_cost(self) -> float:
@@ -752,8 +816,9 @@ def decide(summary: Summary) -> Verdict:
         if "+".join(h.effects) in summary.stand_ins and gain(h) >= required and h.plausible
     ]
     cap = [STAND_IN_MARGIN] if rejected else []
-    # A single whose own fitted values show another physics beside it (Candidate.not_alone):
-    # named alone, no surer than a stand-in's replacement.
+    # A single whose own fitted values show another physics beside it (Candidate.not_alone),
+    # or that a pair with it betters (HIDDEN_PARTNER_RATIO): named alone, no surer than a
+    # stand-in's replacement.
     cap += [STAND_IN_MARGIN] if chosen is not None and summary.doubt(chosen.effects) else []
     # Hypotheses that would have been named (before the chosen one) but for a generic form
     # doing as well: the verdict is no surer than the nearest stayed below that bar.
