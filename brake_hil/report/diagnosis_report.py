@@ -188,7 +188,7 @@ def _confidence_words(confidence: float, doubt: str | None = None) -> str:
     if confidence >= 0.9:
         return "high"
     if doubt is not None and confidence >= 0.5:
-        return "moderate: likely not alone (what to check, below)"
+        return "moderate: not sure it is alone (what to check, below)"
     if confidence >= 0.7:
         return "moderate: check the runner-up below"
     return "low: treat the verdict as a hint, not a finding"

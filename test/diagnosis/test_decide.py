@@ -399,3 +399,14 @@ def test_unfitted_pairs_are_fitted_as_rivals_or_partners_of_the_verdict() -> Non
     ):
         case = ruled(noise, pairs)
         assert diagnosis.unfitted_pairs_matter(case, decide(case)) is fit
+    # fitted, they still can never be named: their worst case stays charged, the fit only
+    # adds doubt (a pair that cuts the single's leftover 2 times)
+    unfitted = ruled(BASE / 1e4, partner)
+    for cut in (1.25, 2.0):
+        fitted = dataclasses.replace(
+            unfitted, pairs=(pair("eccentric_load", "bore_friction", BASE / 200 / cut),)
+        )
+        assert not diagnosis.unfitted_pairs_matter(fitted, decide(fitted))
+        assert decide(fitted).effects == ("eccentric_load",)
+        assert decide(fitted).confidence <= decide(unfitted).confidence + 1e-12
+    assert decide(fitted).confidence <= diagnosis._confidence(diagnosis.STAND_IN_MARGIN) + 1e-12
