@@ -73,8 +73,8 @@ def poll_until(daq: CanDaq, frames: int, timeout_s: float = 2.0) -> list:
     return got
 
 
-def wait_until(condition: Callable[[], bool], timeout_s: float) -> bool:
-    """Whether ``condition`` came true within ``timeout_s`` (checked every millisecond)."""
+def wait_until(condition: Callable[[], object], timeout_s: float) -> bool:
+    """Whether ``condition`` came true (or nonzero) within ``timeout_s`` (checked every ms)."""
     deadline = time.monotonic() + timeout_s
     while not condition():
         if time.monotonic() >= deadline:
@@ -322,7 +322,7 @@ def test_an_emulated_adapter_that_closes_lets_its_reader_read_what_it_sent(
             assert device.send(codec.encode(k, {q: values[q][k] for q in QUANTITIES}))
         # nothing read yet: the reader is busy elsewhere (the kernel queues the bytes for the
         # reader on a worker thread, so on a busy machine they show after a moment)
-        assert wait_until(lambda: device.unread() > 0, timeout_s=5.0)
+        assert wait_until(device.unread, timeout_s=5.0)
         closing = threading.Thread(target=device.close, args=(drain_s,))
         closing.start()
         time.sleep(0.3)  # the reader comes back late
