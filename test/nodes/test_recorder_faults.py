@@ -100,17 +100,27 @@ def run_until_the_disk_fills(
             publisher.start(60_000)
             status = process.wait(90)  # it must stop on its own
             publisher.stop.set()
-            time.sleep(0.5)
+            # its status was acknowledged before it exited; the collector's thread may take
+            # it later on a busy runner (a quiet CI run once read none after 0.5 s)
+            deadline = time.monotonic() + 10.0
+            while not recorder_statuses(collector) and time.monotonic() < deadline:
+                time.sleep(0.05)
+            time.sleep(0.5)  # and nothing more comes
     finally:
         publisher.close()
-        statuses = [
-            s
-            for _, array in collector.arrays["/diagnostics"]
-            for s in array.status
-            if s.name == "recorder"
-        ]
+        statuses = recorder_statuses(collector)
         collector.close()
     return status, (tmp_path / "recorder.log").read_text(errors="replace"), statuses
+
+
+def recorder_statuses(collector: Collector) -> list[object]:
+    """The ``recorder`` statuses the collector has received on ``/diagnostics``."""
+    return [
+        s
+        for _, array in collector.arrays["/diagnostics"]
+        for s in array.status
+        if s.name == "recorder"
+    ]
 
 
 def check_stopped_cleanly(
