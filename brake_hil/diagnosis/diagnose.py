@@ -487,12 +487,11 @@ def unfitted_pairs_matter(summary: Summary, verdict: Verdict) -> bool:
     chosen = verdict.chosen or ()
     fitted = {p.effects for p in summary.pairs}
     unfitted = [p for p in summary.pairs_ruled_out if p not in fitted]
-    if any(not set(chosen) & set(p) for p in unfitted if chosen):
+    if chosen and any(not set(chosen) & set(p) for p in unfitted):
         return True
-    single = next((h for h in summary.singles if h.effects == chosen), None)
     return (
-        single is not None
-        and single.held_out_cost > NOISE_EXCESS * summary.floor_cost
+        len(chosen) == 1
+        and summary.leaves_beyond_noise(chosen[0])
         and any(chosen[0] in p for p in unfitted)
     )
 
@@ -560,6 +559,11 @@ class Summary:
             "physics its model does not follow"
         )
 
+    def leaves_beyond_noise(self, name: str) -> bool:
+        """Single ``name`` leaves more than ``NOISE_EXCESS`` times the noise's share."""
+        single = next((h for h in self.singles if h.effects == (name,)), None)
+        return single is not None and single.held_out_cost > NOISE_EXCESS * self.floor_cost
+
     def hidden_partner(self, name: str) -> tuple[str, float] | None:
         """The second effect of the best pair with single ``name``, and its cut; or None.
 
@@ -569,7 +573,7 @@ class Summary:
         find.
         """
         single = next((h for h in self.singles if h.effects == (name,)), None)
-        if single is None or single.held_out_cost <= NOISE_EXCESS * self.floor_cost:
+        if single is None or not self.leaves_beyond_noise(name):
             return None
         pairs = [
             p
