@@ -177,10 +177,10 @@ def test_an_unknown_id_is_dropped_and_counted(sender: can.BusABC, daq: CanDaq) -
 
 def test_a_silent_bus_is_stale_within_10_ms(sender: can.BusABC, daq: CanDaq) -> None:
     assert daq.health().status is DaqStatus.STALE  # nothing received yet
+    silent_since = time.monotonic()  # the frame's deadline is armed when it is read, later
     sender.send(daq.codec.encode(1, {"p_i": 1e6, "p_b": 2e6})[0])
     assert len(poll_until(daq, 1)) == 1
     assert daq.health().status is DaqStatus.OK
-    silent_since = time.monotonic()
     while daq.health().status is DaqStatus.OK:
         daq.poll(timeout=0.001)
     # STALE at the deadline the frame armed (never before it; the latency itself is measured
