@@ -7,7 +7,7 @@ one runs slcan over a pseudo-terminal pair (:class:`SlcanPty`), which needs pyse
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 import contextlib
 from pathlib import Path
 import threading
@@ -30,6 +30,7 @@ from brake_hil.io.can_daq import (
     default_dbc_path,
 )
 from brake_hil.physics.measurement import SENSORS, measure
+from test.waiting import wait_until
 
 INTERFACE = "virtual"
 QUANTITIES = ("p_i", "p_b", "F_k", "x_c", "p_a")
@@ -71,16 +72,6 @@ def poll_until(daq: CanDaq, frames: int, timeout_s: float = 2.0) -> list:
     while len(got) < frames and time.monotonic() < deadline:
         got += daq.poll(timeout=0.01)
     return got
-
-
-def wait_until(condition: Callable[[], object], timeout_s: float) -> bool:
-    """Whether ``condition`` came true (or nonzero) within ``timeout_s`` (checked every ms)."""
-    deadline = time.monotonic() + timeout_s
-    while not condition():
-        if time.monotonic() >= deadline:
-            return False
-        time.sleep(0.001)
-    return True
 
 
 def test_crc8_matches_the_sae_j1850_check_value() -> None:

@@ -27,6 +27,7 @@ from brake_hil.topics import MASTER_CYLINDER_PRESSURE, PREDICTED_OUTPUTS
 from test.conftest import CONFIG
 from test.nodes.faults import MS, SamplePublisher
 from test.nodes.harness import Collector, ros_domain, unique_domain_id
+from test.waiting import wait_until, wait_until_still
 
 RIG = CONFIG / "rig_default.yaml"
 MEAN_PRESSURE = 1.6e6
@@ -58,6 +59,16 @@ def _inputs(base_ns: int) -> list[tuple[int, float]]:
     return samples
 
 
+def _reported_backwards(collector: Collector) -> bool:
+    """Whether an input status counting every backward stamp has come."""
+    return any(
+        status.name == "caliper_model: input"
+        and f"{BACKWARDS} samples stamped at or before" in status.message
+        for _, array in collector.arrays[common.DIAGNOSTICS_TOPIC]
+        for status in array.status
+    )
+
+
 @pytest.fixture(scope="module")
 def faulty_run(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     out: Path = tmp_path_factory.mktemp("model_faults")
@@ -79,7 +90,12 @@ def faulty_run(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
             assert collector.wait_for_publishers(PREDICTED_NAMES), "the model did not come up"
             time.sleep(0.5)
             source.publish(samples)
-            time.sleep(1.5)  # the model steps the last samples and reports
+            # the model steps the last samples and reports them; a busy runner's node and
+            # collector lag: wait (generously) for its predictions to stop coming and for a
+            # status counting every backward stamp, not a fixed time
+            wait_until(lambda: collector.samples[PREDICTED_NAMES[0]], 30.0)
+            wait_until_still(lambda: len(collector.samples[PREDICTED_NAMES[0]]), 1.0, 30.0)
+            wait_until(lambda: _reported_backwards(collector), 30.0)
         finally:
             code = stop_node(node)
             source.close()

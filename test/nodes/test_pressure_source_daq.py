@@ -23,6 +23,7 @@ from brake_hil.topics import BLOCK_FORCE, BORE_PRESSURE, CALIPER_DISPLACEMENT
 from brake_hil.topics import MASTER_CYLINDER_PRESSURE as P_I
 from test.nodes.faults import start_can_source
 from test.nodes.harness import Collector, ros_domain, unique_domain_id
+from test.waiting import wait_until
 
 pytest.importorskip("serial", reason="python-can's slcan interface needs pyserial")
 
@@ -47,15 +48,6 @@ def _phases(samples: list[Any]) -> tuple[list[Any], list[Any]]:
         if samples[index][0] - samples[index - 1][0] > 500_000_000:
             return samples[:index], samples[index:]
     return samples, []
-
-
-def _wait_for(predicate: Any, timeout_s: float) -> bool:
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        if predicate():
-            return True
-        time.sleep(0.02)
-    return False
 
 
 def _send(adapter: SlcanPty, codec: RigFrameCodec, first: int, count: int) -> list[Any]:
@@ -100,7 +92,7 @@ def daq_run(tmp_path_factory: pytest.TempPathFactory) -> DaqRun:
         source = start_can_source(link, env, out, STALE_AFTER_MS)
         try:
             # open and waiting: STALE (no frame yet), not ADAPTER_LOST
-            assert _wait_for(
+            assert wait_until(
                 lambda: any(
                     common.status_values(s)["frames_ok"] == "0"
                     and s.level == bytes([common.STALE])
@@ -112,7 +104,7 @@ def daq_run(tmp_path_factory: pytest.TempPathFactory) -> DaqRun:
             sent = _send(adapter, codec, 0, 1500)
             first_burst_end_ns = time.time_ns()
             # the node has read the pty (a busy runner's reader lags), then silence
-            _wait_for(lambda: len(collector.samples[P_I.name]) >= len(sent) // 2, 30.0)
+            wait_until(lambda: len(collector.samples[P_I.name]) >= len(sent) // 2, 30.0)
             time.sleep(0.5)
             # taken before the close: on a busy runner the node can see the loss and report it
             # before this thread runs again (a report received "before" the loss, failed once)
@@ -120,7 +112,7 @@ def daq_run(tmp_path_factory: pytest.TempPathFactory) -> DaqRun:
             adapter.close()  # the adapter vanishes
             time.sleep(0.5)
             adapter = SlcanPty(link)  # and comes back
-            reopened = _wait_for(
+            reopened = wait_until(
                 lambda: any(
                     common.status_values(s)["reconnects"] == "1"
                     for _, _, s in _daq_statuses(collector)
@@ -128,6 +120,11 @@ def daq_run(tmp_path_factory: pytest.TempPathFactory) -> DaqRun:
                 10.0,
             )
             resent = _send(adapter, codec, 5000, 300) if reopened else []
+            # every resent acquisition through (a busy runner's node and collector lag),
+            # then none more
+            wait_until(
+                lambda: len(_phases(collector.samples[P_I.name])[1]) >= len(resent) // 2, 30.0
+            )
             time.sleep(0.5)
         finally:
             exit_code = stop_node(source, timeout_s=10.0)

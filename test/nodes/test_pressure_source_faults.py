@@ -22,6 +22,7 @@ from brake_hil.nodes import common
 from brake_hil.topics import MASTER_CYLINDER_PRESSURE as P_I
 from test.nodes.faults import start_can_source
 from test.nodes.harness import Collector, ros_domain, unique_domain_id
+from test.waiting import wait_until
 
 pytest.importorskip("serial", reason="python-can's slcan interface needs pyserial")
 
@@ -83,6 +84,9 @@ def faulty_daq(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
                 burst = _acquisitions(codec, GOOD + stop * BURST, BURST)
                 spans["stops"].append(_send(adapter, burst))
                 time.sleep(SILENCE_S)
+            # every good acquisition through (a busy runner's node and collector lag), then
+            # none more
+            wait_until(lambda: len(collector.samples[P_I.name]) >= GOOD + STOPS * BURST, 30.0)
             time.sleep(0.5)
         finally:
             code = stop_node(source, timeout_s=10.0)
