@@ -12,24 +12,30 @@ from brake_hil.diagnosis.candidates.base import (
     Context,
     Draft,
 )
-from brake_hil.diagnosis.engine import LINE_DROP, State, Step, Term
+from brake_hil.diagnosis.engine import LINE_DROP, MidStep, State, Step, Term
 from brake_hil.physics.catalogue import CATALOGUE
 from brake_hil.types import FloatArray
 
 
 @dataclass(frozen=True, eq=False)
-class QuadraticDrop(Term, Step):
-    """A line pressure drop ``K Q |Q|`` at the valve, held over each step (its own step)."""
+class QuadraticDrop(Term):
+    """A line pressure drop ``K Q |Q|`` at the valve, held over each step."""
 
     coefficient: FloatArray  # Pa s^2/m^6, K
 
     def start(self, state: State) -> Step:
-        """Stateless: the term is its own step."""
-        return self
+        """The drop at the flow of each step's middle."""
+        return _QuadraticDropStep(self.coefficient)
+
+
+class _QuadraticDropStep(Step):
+    def __init__(self, coefficient: FloatArray) -> None:
+        self.coefficient = coefficient
+        self.flow = MidStep()
 
     def inputs(self, state: State, explicit: FloatArray) -> None:
-        """The drop at the flow through the valve."""
-        q = state.line_flow()
+        """The drop at the flow through the valve in the middle of the step."""
+        q = self.flow(state.line_flow())
         explicit[:, LINE_DROP] += self.coefficient * q * np.abs(q)
 
 

@@ -29,11 +29,12 @@ from brake_hil.diagnosis.engine.mechanisms import (
     tustin_mode,
 )
 from brake_hil.diagnosis.engine.plant import CALIPER_FORCE, LINE_DROP, RELATIVE_FORCE, Coupling
-from brake_hil.diagnosis.engine.terms import Entry, ModelSpec, State, Step, Term
+from brake_hil.diagnosis.engine.terms import Entry, MidStep, ModelSpec, State, Step, Term
 
 __all__ = [
     "CALIPER_FORCE",
     "LINE_DROP",
+    "MidStep",
     "RELATIVE_FORCE",
     "ChannelDelay",
     "ChannelReading",
