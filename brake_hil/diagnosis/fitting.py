@@ -29,6 +29,10 @@ from brake_hil.errors import FitError
 from brake_hil.topics import OUTPUT_CHANNELS
 from brake_hil.types import BoolArray, FloatArray, IndexArray
 
+NOT_FINITE_RESIDUAL = 1.0e6
+"""What a residual the simulation could not give (not finite) counts as: far above any real
+one (a misfit of ``MODEL_ERROR`` counts 1), so the solver steps back from where the model goes
+unstable instead of stopping on it."""
 PREROLL = 0.8
 """Seconds simulated before a window (s)."""
 FIT_SPAN = 1.6
@@ -277,10 +281,15 @@ def fit(model: Model, start: FloatArray | None = None, max_iterations: int = 15)
     the point itself. A ``start`` at which the simulation is not finite (two effects' fitted
     values can make an explicit term unstable together) falls back to the model's own start.
 
+    Where the simulation goes non-finite during the search (a step of the Jacobian's, from the
+    start on, or a trial point) its residuals count ``NOT_FINITE_RESIDUAL`` each.
+
     Raises:
-        FitError: the simulation is not finite at the model's own start either.
+        FitError: the simulation is not finite at the model's own start either, or the
+            solver fails on it.
     """
     ds = model.dataset
+    name = " + ".join(model.names) or "the LTI baseline"
     specs = model.parameters()
     own = model.effect_size
     sigma = model.prior_sigmas()
@@ -308,34 +317,43 @@ def fit(model: Model, start: FloatArray | None = None, max_iterations: int = 15)
             cache[key] = objective(rows(x))
         return cache[key]
 
+    def searched(x: FloatArray) -> FloatArray:
+        values = evaluate(x)
+        return np.where(np.isfinite(values), values, NOT_FINITE_RESIDUAL)
+
     def residual(x: FloatArray) -> FloatArray:
-        return np.asarray(evaluate(x)[0], dtype=float)
+        return np.asarray(searched(x)[0], dtype=float)
 
     def jacobian(x: FloatArray) -> FloatArray:
-        r = evaluate(x)
+        r = searched(x)
         actual = np.array([_step(x, j, steps[j], upper)[j] - x[j] for j in range(x.size)])
         return np.asarray((r[1:] - r[0]).T / actual, dtype=float)
 
     with np.errstate(over="ignore", invalid="ignore"):  # non-finite is handled here
-        if not np.all(np.isfinite(evaluate(x0))) and start is not None:
+        if not np.all(np.isfinite(evaluate(x0)[0])) and start is not None:
             x0 = np.clip(_to_search(model, model.start()), lower, upper)  # the model's own start
-        if not np.all(np.isfinite(evaluate(x0))):
-            name = " + ".join(model.names) or "the LTI baseline"
+        if not np.all(np.isfinite(evaluate(x0)[0])):
             raise FitError(f"{name}: the model's simulation is not finite where its fit starts")
-        result = scipy.optimize.least_squares(
-            residual,
-            x0,
-            jac=jacobian,
-            bounds=(lower, upper),
-            method="trf",
-            max_nfev=max_iterations,
-            x_scale=width / 4,
-        )
+        try:
+            result = scipy.optimize.least_squares(
+                residual,
+                x0,
+                jac=jacobian,
+                bounds=(lower, upper),
+                method="trf",
+                max_nfev=max_iterations,
+                x_scale=width / 4,
+            )
+        except (ValueError, np.linalg.LinAlgError) as error:
+            raise FitError(f"{name}: the fit failed: {error}") from error
     theta = _from_search(model, result.x)
     data_part = result.fun[: result.fun.size - sigma.size] * MODEL_ERROR
     train_cost = float(np.sum(data_part**2))
     uncertainty = _uncertainty(model, result.jac, theta, train_cost, data_part.size)
-    nrmse, window_costs = model.scores(ds.held_out, theta)
+    with np.errstate(over="ignore", invalid="ignore"):
+        nrmse, window_costs = model.scores(ds.held_out, theta)
+    if not all(np.isfinite(v) for v in (*nrmse.values(), *window_costs)):
+        raise FitError(f"{name}: the fitted model's simulation is not finite on held-out data")
     return Fit(
         effects=model.names,
         theta=theta,
@@ -374,8 +392,11 @@ def _uncertainty(
     independent = max(INDEPENDENT_SAMPLES_PER_SECOND * span * len(OUTPUT_CHANNELS), 2.0)
     inflation = max(cost / MODEL_ERROR**2, 1e-6) * max(samples / independent, 1.0)
     try:
-        covariance = np.linalg.inv(jac.T @ jac) * inflation
+        with np.errstate(over="ignore", invalid="ignore"):  # a Jacobian of NOT_FINITE_RESIDUAL
+            covariance = np.linalg.inv(jac.T @ jac) * inflation
     except np.linalg.LinAlgError:
+        return None
+    if not np.all(np.isfinite(covariance)):
         return None
     sigma = np.sqrt(np.clip(np.diag(covariance), 0.0, None))
     logarithmic = np.array([log for *_, log in model.parameters()], dtype=bool)
