@@ -27,6 +27,7 @@ import json
 from pathlib import Path
 import statistics
 import time
+import traceback
 
 from brake_hil.app.output import check_outputs, write_json
 from brake_hil.app.parallel import SERIAL, Outcome, Workers, parallel_map, values
@@ -37,6 +38,10 @@ from brake_hil.physics.rig import load_rig
 from brake_hil.topics import MASTER_CYLINDER_PRESSURE, MEASURED_OUTPUTS
 
 CONFIDENCE_BINS = ((0.0, 0.5), (0.5, 0.7), (0.7, 0.8), (0.8, 0.9), (0.9, 0.95), (0.95, 1.01))
+INTERNAL_ERROR = "internal error"
+"""How a case's error starts when the diagnosis itself failed on it (a bug, not its input):
+the case is scored as the verdict none and the run goes on; ``brake-hil benchmark`` then
+exits 1."""
 SURE = 0.9
 """A verdict at this confidence or more is *sure*: at most 1 in 20 of them may be wrong."""
 
@@ -67,6 +72,18 @@ def diagnose_case(case_dir: Path) -> CaseResult:
         result = diagnose(recording, rig)
     except BrakeHilError as err:
         return CaseResult(case_dir.name, (), 0.0, time.perf_counter() - began, {}, {}, str(err))
+    except Exception as err:  # a bug of the diagnosis: this case's, the others still count
+        where = traceback.extract_tb(err.__traceback__)[-1]
+        return CaseResult(
+            case_dir.name,
+            (),
+            0.0,
+            time.perf_counter() - began,
+            {},
+            {},
+            f"{INTERNAL_ERROR}: {type(err).__name__}: {err} "
+            f"({Path(where.filename).name}:{where.lineno})",
+        )
     return CaseResult(
         case=case_dir.name,
         effects=result.effects,

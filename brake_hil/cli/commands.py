@@ -341,7 +341,7 @@ def benchmark(args: argparse.Namespace) -> int:
 
     Then the figures; a figure over no case is ``n/a``.
     """
-    from brake_hil.app.benchmark import case_count, run_benchmark
+    from brake_hil.app.benchmark import INTERNAL_ERROR, case_count, run_benchmark
     from brake_hil.cli.workers import workers_from_args
 
     workers = workers_from_args(args)
@@ -390,6 +390,15 @@ def benchmark(args: argparse.Namespace) -> int:
             f"{100 * row['accuracy']:5.1f} %"
         )
     _json_written(result.json_path)
+    failed = [r.case for r in result.results if r.error.startswith(INTERNAL_ERROR)]
+    if failed:
+        print(
+            f"brake-hil benchmark: {args.directory}: the diagnosis failed on {len(failed)} "
+            f"case(s) (an internal error, scored as none; the errors are in the JSON): "
+            + ", ".join(failed),
+            file=sys.stderr,
+        )
+        return 1
     return 0
 
 
