@@ -96,12 +96,12 @@ class MidStep:
     lags the state by half a step, which a strong nonlinear term turns into a phase error
     (a turbulent valve taking most of the line's drop, held so, left 13-42 times the noise's
     share that a sensor delay or a hose then took up; at the mid-step flow 4-11 times, and
-    neither helped: four orifices of both families). ``y_k + minmod(y_k - y_(k-1), y_(k-1) - y_(k-2)) / 2``: the slope
-    limiter (minmod: the smaller of two slopes of one sign, else none) keeps the explicit
-    input from feeding an oscillation of the step's own period (plain extrapolation went
-    unstable at a drop 20 times the orifice candidate's largest, where the held input was
-    still stable at 50 times, and so is this), and at a turning point it holds the start's
-    value.
+    neither helped: four orifices of both families).
+    ``y_k + minmod(y_k - y_(k-1), y_(k-1) - y_(k-2)) / 2``: the slope limiter (minmod: the
+    smaller of two slopes of one sign, else none) keeps the explicit input from feeding an
+    oscillation of the step's own period (plain extrapolation went unstable at a drop 20
+    times the orifice candidate's largest, where the held input was still stable at 50 times,
+    and so is this), and at a turning point it holds the start's value.
     """
 
     def __init__(self) -> None:
