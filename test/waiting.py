@@ -11,8 +11,12 @@ from collections.abc import Callable
 import time
 
 
-def wait_until(condition: Callable[[], object], timeout_s: float, poll_s: float = 0.001) -> bool:
-    """Whether ``condition`` came true (or nonzero) within ``timeout_s`` (checked every poll)."""
+def wait_until(condition: Callable[[], object], timeout_s: float, poll_s: float = 0.02) -> bool:
+    """Whether ``condition`` came true (or nonzero) within ``timeout_s`` (checked every poll).
+
+    Every 20 ms by default: a condition that counts thousands of samples, checked every
+    millisecond, would take the core the node under test needs on a 2-core runner.
+    """
     deadline = time.monotonic() + timeout_s
     while not condition():
         if time.monotonic() >= deadline:
