@@ -97,6 +97,12 @@ def run_until_the_disk_fills(
     try:
         with recorder(tmp_path, output_dir, domain, preexec) as process:
             publisher.wait_for_recorder()
+            # the collector must have found the recorder's /diagnostics publisher (beside the
+            # test publisher's) before the disk fills: the recorder waits for the acks of the
+            # subscribers it has matched, and on a busy runner discovery can come later
+            deadline = time.monotonic() + 30.0
+            while collector.publishers("/diagnostics") < 2 and time.monotonic() < deadline:
+                time.sleep(0.05)
             publisher.start(60_000)
             status = process.wait(90)  # it must stop on its own
             publisher.stop.set()
