@@ -64,6 +64,10 @@ class CaseResult:
 def diagnose_case(case_dir: Path) -> CaseResult:
     """Diagnose ``case_dir/recording`` against ``case_dir/rig.yaml``; nothing else is read."""
     began = time.perf_counter()
+
+    def failed(error: str) -> CaseResult:
+        return CaseResult(case_dir.name, (), 0.0, time.perf_counter() - began, {}, {}, error)
+
     try:
         rig = load_rig(case_dir / "rig.yaml")
         recording = read_recording(
@@ -71,18 +75,12 @@ def diagnose_case(case_dir: Path) -> CaseResult:
         )
         result = diagnose(recording, rig)
     except BrakeHilError as err:
-        return CaseResult(case_dir.name, (), 0.0, time.perf_counter() - began, {}, {}, str(err))
+        return failed(str(err))
     except Exception as err:  # a bug of the diagnosis: this case's, the others still count
         where = traceback.extract_tb(err.__traceback__)[-1]
-        return CaseResult(
-            case_dir.name,
-            (),
-            0.0,
-            time.perf_counter() - began,
-            {},
-            {},
+        return failed(
             f"{INTERNAL_ERROR}: {type(err).__name__}: {err} "
-            f"({Path(where.filename).name}:{where.lineno})",
+            f"({Path(where.filename).name}:{where.lineno})"
         )
     return CaseResult(
         case=case_dir.name,

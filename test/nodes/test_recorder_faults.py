@@ -33,6 +33,7 @@ from brake_hil.io.unfinished import open_unfinished
 from brake_hil.nodes import common
 from test.nodes.harness import Collector, ros_domain
 from test.nodes.test_recorder import SAMPLE_TOPICS, Publisher, domain_id
+from test.waiting import wait_until
 
 RECORDED = [s.name for s in SAMPLE_TOPICS] + ["/diagnostics"]
 
@@ -100,17 +101,13 @@ def run_until_the_disk_fills(
             # the collector must have found the recorder's /diagnostics publisher (beside the
             # test publisher's) before the disk fills: the recorder waits for the acks of the
             # subscribers it has matched, and on a busy runner discovery can come later
-            deadline = time.monotonic() + 30.0
-            while collector.publishers("/diagnostics") < 2 and time.monotonic() < deadline:
-                time.sleep(0.05)
+            wait_until(lambda: collector.publishers("/diagnostics") >= 2, 30.0)
             publisher.start(60_000)
             status = process.wait(90)  # it must stop on its own
             publisher.stop.set()
             # its status was acknowledged before it exited; the collector's thread may take
             # it later on a busy runner (a quiet CI run once read none after 0.5 s)
-            deadline = time.monotonic() + 10.0
-            while not recorder_statuses(collector) and time.monotonic() < deadline:
-                time.sleep(0.05)
+            wait_until(lambda: recorder_statuses(collector), 10.0)
             time.sleep(0.5)  # and nothing more comes
     finally:
         publisher.close()
