@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
+import pytest
 
 from brake_hil.diagnosis.fitting import Fit
-from brake_hil.diagnosis.physics_checks import channel_check
+from brake_hil.diagnosis.physics_checks import CheckOutcome, channel_check
 
 
 def _fit(effects: tuple[str, ...], nrmse: dict[str, float]) -> Fit:
@@ -56,6 +59,108 @@ def test_the_farthest_rig_value_is_counted_from_the_rig_file_in_tolerance_sigmas
     # a value moved down counts as far as one moved up
     down = Fit((), np.array([5.0, 1.0, 0.15]), names, ("-", "x", "x"), 1.0, 1.0, {})
     assert farthest_rig_value(calibration, down)[0] == "valve_resistance"  # type: ignore[arg-type]
+
+
+def test_a_value_of_the_candidates_own_physics_moved_its_way_counts_sooner() -> None:
+    """A freed baseline's softer hose wall is the hose's own physics at 3 sigmas; any other
+    value, or the hose wall moved the other way, only at the out-of-tolerance 5 sigmas."""
+    from types import SimpleNamespace
+
+    from brake_hil.diagnosis.physics_checks import (
+        OUT_OF_TOLERANCE_SIGMAS,
+        OWN_VALUE_SIGMAS,
+        far_moved_value,
+    )
+
+    calibration = SimpleNamespace(
+        multipliers={"hose_stiffness": 1.0, "air_fraction": 1.0},
+        sigmas={"hose_stiffness": 0.1, "air_fraction": 1.0},
+    )
+    names = ("calibration.hose_stiffness", "calibration.air_fraction")
+
+    def freed(hose: float, air: float) -> Fit:
+        return Fit((), np.array([hose, air]), names, ("x", "x"), 1.0, 1.0, {})
+
+    softer = freed(np.exp(-0.35), 1.0)  # 3.5 sigmas softer
+    moved = far_moved_value(calibration, softer, ("hose_compliance",))  # type: ignore[arg-type]
+    assert moved is not None and moved[0] == "hose_stiffness"
+    assert OWN_VALUE_SIGMAS < moved[1] < OUT_OF_TOLERANCE_SIGMAS and "hose_compliance" in moved[2]
+    # the same move is no hose of a pair without one, nor a stiffer wall of a hose
+    assert far_moved_value(calibration, softer, ("orifice_flow",)) is None  # type: ignore[arg-type]
+    stiffer = freed(np.exp(0.35), 1.0)
+    assert far_moved_value(calibration, stiffer, ("hose_compliance",)) is None  # type: ignore[arg-type]
+    # beyond the out-of-tolerance bar any value counts, for any effect
+    far = far_moved_value(calibration, freed(1.0, np.exp(-5.5)), ("orifice_flow",))  # type: ignore[arg-type]
+    assert far is not None and far[0] == "air_fraction" and "within tolerance" in far[2]
+    # a pair with the hose: its member's own value counts
+    pair = ("eccentric_load", "hose_compliance")
+    assert far_moved_value(calibration, softer, pair) is not None  # type: ignore[arg-type]
+
+
+@pytest.fixture(scope="module")
+def family_b_cases(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    """Two recordings of the family-b benchmark schedule of seed 1601 (its cases 13 and 25)."""
+    from brake_hil.virtual_rig.cases import make_case, plan_cases
+
+    root = tmp_path_factory.mktemp("family_b")
+    specs = plan_cases(26, 1601, family="b")
+    folders = {}
+    for number in (13, 25):
+        make_case(specs[number], root, 5.0)
+        folders[specs[number].kind] = root / specs[number].case_id
+    return folders
+
+
+def _hose_prior_check(folder: Path) -> tuple[float, CheckOutcome]:
+    """The hose's held-out gain over the calibrated baseline and its wider-priors check."""
+    from brake_hil.diagnosis.calibration import calibrate
+    from brake_hil.diagnosis.candidates import candidate
+    from brake_hil.diagnosis.dataset import prepare
+    from brake_hil.diagnosis.fitting import Model, fit
+    from brake_hil.diagnosis.physics_checks import prior_check
+    from brake_hil.io.recording_reader import read_recording
+    from brake_hil.physics.rig import load_rig
+
+    rig = load_rig(folder / "rig.yaml")
+    dataset = prepare(read_recording(folder / "recording"), rig)
+    calibration = calibrate(dataset, rig)
+    baseline = fit(Model(calibration, [], dataset))
+    hose = fit(Model(calibration, [candidate("hose_compliance")], dataset))
+    return baseline.held_out_cost / hose.held_out_cost, prior_check(
+        calibration, dataset, hose, 1.5
+    )
+
+
+def test_a_hose_the_freed_calibration_explains_only_as_a_softer_hose_is_the_hose(
+    family_b_cases: dict[str, Path], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Seed 1601's family-b case 13, a subtle creeping hose (strength 0.16): the hose cuts
+    the calibrated baseline's held-out error 6.4 times; with the priors freed the baseline comes
+    within 1.47 times of it, but only with the hose wall 3.9 sigmas softer than the rig file's:
+    the hose's own physics, so it is not set aside (it was, as a parameter error, before)."""
+    from brake_hil.diagnosis.candidates.hose_compliance import HoseCompliance
+
+    gain, outcome = _hose_prior_check(family_b_cases["single"])
+    assert gain > 3.0
+    assert outcome.passed, outcome.finding
+    assert "only by moving hose_stiffness" in outcome.finding
+    assert "the way hose_compliance moves it" in outcome.finding
+    monkeypatch.setattr(HoseCompliance, "own_rig_values", ())
+    _, without = _hose_prior_check(family_b_cases["single"])
+    assert not without.passed and "a parameter error" in without.finding
+
+
+def test_a_value_that_drifts_without_explaining_does_not_pass_the_check(
+    family_b_cases: dict[str, Path],
+) -> None:
+    """Seed 1601's family-b case 25, out-of-library physics (a force sensor's hysteresis): the
+    freed baseline lets the hose wall drift 8 sigmas while cutting the error 1.01 times; held to
+    its tolerance the baseline is as good, so the drift explains nothing (before, any value 5
+    sigmas out passed the check)."""
+    gain, outcome = _hose_prior_check(family_b_cases["unexplained"])
+    assert gain < 1.5
+    assert not outcome.passed
+    assert "but held to its tolerance the baseline still comes within" in outcome.finding
 
 
 def test_a_delay_is_the_same_at_every_amplitude() -> None:

@@ -122,6 +122,12 @@ class Candidate:
     kin_forms: ClassVar[frozenset[tuple[str, str]]] = frozenset()
     """Generic forms ``(form, channel)`` (:mod:`..residual_forms`) that are this physics in a
     free shape: one that describes the misfit as well does not make it unidentified."""
+    own_rig_values: ClassVar[tuple[tuple[str, int], ...]] = ()
+    """Calibrated rig values (``calibration.UNCERTAIN`` names) that are this physics' own, each
+    with the sign of the log-multiplier this physics moves it by: a calibration that explains the
+    recording only by moving one of them far that way out of its tolerance names this physics
+    in the calibration's terms, not a parameter error (the wider-priors check of
+    ``physics_checks``)."""
 
     @property
     def name(self) -> str:

@@ -53,6 +53,7 @@ class HoseCompliance(Candidate):
     """
 
     entry = CATALOGUE["hose_compliance"]
+    own_rig_values = (("hose_stiffness", -1),)  # a hose that swells more has a softer wall
     parameters = (
         CandidateParameter("hose_compliance_ratio", "-", 0.02, 20.0, 0.5, logarithmic=True),
         CandidateParameter("hose_creep_ratio", "-", 0.01, 5.0, 0.3, True, absent=0.0),
