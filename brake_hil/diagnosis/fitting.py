@@ -2,9 +2,10 @@
 
 Each window is simulated from ``PREROLL`` seconds before it, starting at equilibrium, so the
 start-up transient has died away inside the window (the LTI model's slowest mode decays in
-about 0.1 s; a slider settles within one cycle). Training windows are capped at
-``FIT_SPAN`` seconds, which keeps a fit to a few seconds on this machine; held-out windows
-are scored whole.
+about 0.1 s; a slider settles within one cycle), or from longer before when a candidate's
+memory forgets its start more slowly (``Candidate.lead_in``: a seal seat that creeps over a
+second). Training windows are capped at ``FIT_SPAN`` seconds, which keeps a fit to a few
+seconds on this machine; held-out windows are scored whole.
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ NOT_FINITE_RESIDUAL = 1.0e6
 one (a misfit of ``MODEL_ERROR`` counts 1), so the solver steps back from where the model goes
 unstable instead of stopping on it."""
 PREROLL = 0.8
-"""Seconds simulated before a window (s)."""
+"""Seconds simulated before a window (s), at least."""
 FIT_SPAN = 1.6
 """Longest stretch of a training window used in a fit (s): eight 5 Hz cycles."""
 FIT_DECIMATION = 2
@@ -79,6 +80,7 @@ class Model:
         self.dataset = dataset
         self.context = make_context(calibration, dataset)
         self.sizes = [len(c.parameters) for c in self.candidates]
+        self.preroll = max([PREROLL, *(c.lead_in for c in self.candidates)])
         self.pressure_ceiling = 1.2 * float(np.max(dataset.pressure))
 
     @property
@@ -150,11 +152,11 @@ class Model:
     def _span(self, window: Window, span: float | None) -> tuple[int, int, BoolArray]:
         """First and end sample simulated for ``window``, and the mask of those inside it.
 
-        The simulation starts ``PREROLL`` seconds before the window.
+        The simulation starts ``preroll`` seconds before the window.
         """
         ds = self.dataset
         end = window.end if span is None else min(window.end, window.start + span)
-        first = int(np.searchsorted(ds.time, window.start - PREROLL))
+        first = int(np.searchsorted(ds.time, window.start - self.preroll))
         last = int(np.searchsorted(ds.time, end - 1e-9))
         inside = ds.time[first:last] >= window.start - 1e-9
         return first, last, inside

@@ -119,6 +119,10 @@ class Candidate:
 
     entry: ClassVar[EffectEntry]  # what the effect is (name, physics, source, signature)
     parameters: ClassVar[tuple[CandidateParameter, ...]]
+    lead_in: ClassVar[float] = 0.0
+    """History (s) a fit's run needs before its window for this physics' memory to forget the
+    equilibrium the run starts from; the fit's own lead-in (``fitting.PREROLL``) serves what
+    forgets faster."""
     kin_forms: ClassVar[frozenset[tuple[str, str]]] = frozenset()
     """Generic forms ``(form, channel)`` (:mod:`..residual_forms`) that are this physics in a
     free shape: one that describes the misfit as well does not make it unidentified."""
