@@ -93,11 +93,10 @@ OUT_OF_TOLERANCE_SIGMAS = 5.0
 file's (the calibration's prior) explains the misfit by no parameter error within tolerance:
 the check does not set the candidate aside for it, provided that value does the explaining (as
 for ``OWN_VALUE_SIGMAS``; since 2026-11-27: on an out-of-library recording the hose stiffness
-drifted 8 sigmas in a freed baseline that cut the error 1.01 times). (Measured on 64
-virtual-rig recordings of
-both families, 2026-11-25: the freed baselines of 32 nulls moved a value at most 4.3 sigmas,
-an air fraction the recording does not identify; of 32 hose singles, 23 moved the hose
-stiffness 5.2-19.8 sigmas.)"""
+drifted 8 sigmas in a freed baseline that cut the error 1.01 times). (Measured on 64 virtual-rig
+recordings of both families, 2026-11-25: the freed baselines of 32 nulls moved a value at most
+4.3 sigmas, an air fraction the recording does not identify; of 32 hose singles, 23 moved the
+hose stiffness 5.2-19.8 sigmas.)"""
 OWN_VALUE_SIGMAS = 3.0
 """A freed baseline that needs a rig value of the candidate's own physics (``own_rig_values``:
 a hose's wall stiffness) this many sigmas of its tolerance from the rig file's, the way that
