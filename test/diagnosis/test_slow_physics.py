@@ -1,4 +1,4 @@
-"""A candidate with a slow memory is fitted on runs long enough to forget their start."""
+"""Physics slower than a cycle: a seat that creeps, a rig that heats, fitted with its own times."""
 
 from __future__ import annotations
 
@@ -31,3 +31,26 @@ def test_a_creeping_seat_is_fitted_with_its_own_creep_time(default_rig: Rig) -> 
     fitted = fit(model).parameters()
     assert fitted["relaxation_time"] == pytest.approx(RELAXATION_TIME, rel=0.25)
     assert fitted["stiffness_asymmetry"] == pytest.approx(0.4, rel=0.2)
+
+
+def test_a_rig_that_heats_up_is_fitted_with_its_heating_time(default_rig: Rig) -> None:
+    """The virtual rig heating with a 15 s time constant over three 5 s segments: a drift
+    linear in time left a misfit many times the one of a drift that settles as the rig's
+    temperature does (first-order heating), whose heating time is the drawn one."""
+    from brake_hil.diagnosis.candidates.thermal_drift import LINEAR, heated_time
+
+    heating = make_effect("thermal_drift", 1.0, time_constant=15.0)
+    run = simulate_rig(
+        default_rig, [heating], seed_pulsing((1.38e6, 2.07e6, 2.76e6), pulsing_s=5.0), seed=4
+    )
+    dataset = prepare(run.as_recording(), default_rig)
+    calibration = calibrate(dataset, default_rig)
+    baseline = fit(Model(calibration, [], dataset))
+    drift = fit(Model(calibration, [candidate("thermal_drift")], dataset))
+    fitted = drift.parameters()
+    assert fitted["heating_time"] == pytest.approx(15.0, rel=0.3)
+    assert fitted["line_drift_rate"] < 0 and fitted["seal_drift_rate"] < 0  # it softens
+    assert baseline.held_out_cost / drift.held_out_cost > 60  # linear in time: 18 on a1601
+    # a model file older than the heating time reads as the linear drift it was
+    assert heated_time(12.0, 5.0, LINEAR) == pytest.approx(7.0, rel=1e-6)
+    assert heated_time(12.0, 5.0, 15.0) < 7.0
