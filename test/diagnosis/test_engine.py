@@ -7,7 +7,7 @@ import pytest
 
 from brake_hil.analysis.comparison import predict
 from brake_hil.diagnosis.candidates.orifice_flow import QuadraticDrop
-from brake_hil.diagnosis.candidates.thermal_drift import LinearDrift
+from brake_hil.diagnosis.candidates.thermal_drift import LINEAR, HeatingDrift
 from brake_hil.diagnosis.engine import FrictionElement, MidStep, ModelSpec, simulate_batch
 from brake_hil.diagnosis.engine.plant import Coupling, build_plant
 from brake_hil.physics.excitation import pulsing_profile
@@ -33,7 +33,9 @@ def test_stepping_loop_equals_the_lti_model_when_no_term_acts(default_rig: Rig, 
     _, pressure = rig_input
     params = derive_parameters(default_rig, 1.08e6)
     reference = np.array(list(predict(pressure, params).values()))
-    spec = ModelSpec((params,), (LinearDrift(np.zeros(1), np.zeros(1), np.zeros(1)),))
+    spec = ModelSpec(
+        (params,), (HeatingDrift(np.zeros(1), np.zeros(1), np.zeros(1), np.full(1, 15.0)),)
+    )
     outputs = simulate_batch(spec, pressure, 1e-3)[0]
     assert np.max(np.abs(outputs - reference) / np.ptp(reference, axis=1)[:, None]) < 1e-9
 
@@ -276,8 +278,9 @@ def test_windows_run_as_one_batch_are_each_run_alone(default_rig: Rig, rig_input
     stretch = pressure[:2400]
     starts = np.array([0.25, 7.5, 13.25])
 
-    def drift(rows: int, reference: float) -> LinearDrift:
-        return LinearDrift(np.full(rows, 0.02), np.full(rows, -0.015), np.full(rows, reference))
+    def drift(rows: int, reference: float) -> HeatingDrift:  # linear: moves with the times
+        rates = (np.full(rows, 0.02), np.full(rows, -0.015))
+        return HeatingDrift(*rates, np.full(rows, reference), np.full(rows, LINEAR))
 
     together = simulate_batch(
         ModelSpec((params,) * 3, (drift(3, 6.0),)),

@@ -52,10 +52,11 @@ class HeatingDrift(Term):
 def heated_time(time: float, reference: float, heating_time: float) -> float:
     """``tau (exp(-t_0 / tau) - exp(-t / tau))`` (s): ``t - t_0`` slowed as the rig settles.
 
-    Times (s) from the recording's start, never before it; a long ``tau`` gives ``t - t_0``.
+    Times (s) from the recording's start; a long ``tau`` gives ``t - t_0``.
     """
-    now, then = max(time, 0.0), max(reference, 0.0)
-    return heating_time * (math.expm1(-then / heating_time) - math.expm1(-now / heating_time))
+    return heating_time * (
+        math.expm1(-reference / heating_time) - math.expm1(-time / heating_time)
+    )
 
 
 class ThermalDrift(Candidate):
