@@ -161,3 +161,21 @@ def test_unregistered_candidates_leave_the_diagnosis() -> None:
     assert "pressure_thickening" not in names
     with pytest.raises(EffectError):
         candidate("pressure_thickening")
+
+
+def test_the_hose_wall_stores_the_same_at_every_operating_pressure(default_rig: Rig) -> None:
+    """The bore's compliance falls with pressure (the air of eq. 18); the hose wall's swell
+    does not (SAE J1401: one volumetric expansion per pressure). Scaled with each segment's
+    ``C_b``, the node left family b's hoses 3-19 times the noise where a fixed one leaves 2-8."""
+    from brake_hil.diagnosis.candidates.base import rig_context
+    from brake_hil.diagnosis.candidates.hose_compliance import HoseNode
+
+    context = rig_context(default_rig, flow_amplitude=2e-6, time_reference=1.0)
+    assert context.reference_compliance == derive_parameters(default_rig).bore_compliance
+    pressures = (0.5e6, 1.0e6, 2.0e6)
+    draft = Draft([derive_parameters(default_rig, p) for p in pressures])
+    assert draft.params[0].bore_compliance > 1.2 * draft.params[-1].bore_compliance
+    candidate("hose_compliance").fill(draft, np.tile([0.8, 1.0, 0.03], (3, 1)), context)
+    (node,) = [t for t in draft.terms if isinstance(t, HoseNode)]
+    assert np.allclose(node.compliance, 0.8 * context.reference_compliance)
+    assert np.allclose(node.creep_compliance, node.compliance)

@@ -47,7 +47,7 @@ def _model(effects: tuple[str, ...], parameters: dict[str, float]) -> ImprovedMo
         (
             ("hose_compliance", "orifice_flow"),
             {
-                "hose_compliance_ratio": 2.0,
+                "hose_wall_ratio": 2.0,
                 "hose_creep_ratio": 0.8,
                 "hose_creep_time": 0.03,
                 "turbulent_share": 0.5,
@@ -92,22 +92,23 @@ def test_malformed_files_are_refused_naming_the_file(tmp_path: Path) -> None:
         read_improved_model(path)
 
 
-def test_an_older_hose_model_without_creep_loads_as_the_elastic_hose_it_was(
-    tmp_path: Path,
-) -> None:
-    """A file written before the hose's creep existed means no creep; one that has the
-    creep predicts differently (the parameters are used, not ignored)."""
+def test_an_older_hose_model_is_refused_and_the_creep_is_used(tmp_path: Path) -> None:
+    """A file from before 2026-11-27 holds ``hose_compliance_ratio``, a multiple of each
+    segment's ``C_b``: run now it would mean another hose, so it is refused, naming the file
+    and the value. A current file's creep changes the prediction (used, not ignored)."""
     _, pressure = pulsing_profile((1.38e6,), ramp_s=0.5, pulsing_s=1.5)
     older = _model(("hose_compliance",), {"hose_compliance_ratio": 2.0}).as_dict()
     path = tmp_path / "older.json"
     path.write_text(json.dumps(older))
-    read = read_improved_model(path).parameters
-    assert read["hose_creep_ratio"] == 0.0 and read["hose_creep_time"] > 0.0
-    elastic = load_improved_model(path, mean_pressure=1.1e6).batch(pressure)
-    creeping = {"hose_compliance_ratio": 2.0, "hose_creep_ratio": 1.0, "hose_creep_time": 0.03}
+    with pytest.raises(ImprovedModelError, match="older.json: 'hose_compliance_ratio' of hose"):
+        read_improved_model(path)
+    elastic = {"hose_wall_ratio": 2.0, "hose_creep_ratio": 0.0, "hose_creep_time": 0.03}
+    stiff = load_improved_model(_model(("hose_compliance",), elastic).save(path), 1.1e6)
+    creeping = {**elastic, "hose_creep_ratio": 1.0}
     newer = _model(("hose_compliance",), creeping).save(tmp_path / "newer.json")
     crept = load_improved_model(newer, mean_pressure=1.1e6).batch(pressure)
-    assert np.max(np.abs(crept[0] - elastic[0])) > 1e-3 * np.ptp(elastic[0])
+    unswollen = stiff.batch(pressure)
+    assert np.max(np.abs(crept[0] - unswollen[0])) > 1e-3 * np.ptp(unswollen[0])
 
 
 def test_an_older_eccentric_load_without_curvature_loads_as_the_linear_share_it_was(

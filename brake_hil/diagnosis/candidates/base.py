@@ -11,7 +11,8 @@ in turn.
 
 The candidates are deliberately simpler than the virtual rig's physics (an ideal Jenkins
 slider, not a rate-dependent bristle law; one lumped hose stage, not a ladder; isothermal,
-not polytropic air; a pure ``Q |Q|`` orifice; a linear drift, not a heating law), so the
+not polytropic air; a pure ``Q |Q|`` orifice; one heating time, not two heat paths and a
+viscosity law), so the
 benchmark does not fit the very equations that made its data. (The hose stage's wall creeps
 as family b's hose node does: for the hose, family b is no longer an independent check.)
 """
@@ -30,6 +31,7 @@ from brake_hil.physics.parameters import (
     ModelParameters,
     SealProperties,
     chamber_volumes,
+    derive_parameters,
     line_resistance,
     seal_properties,
 )
@@ -60,6 +62,7 @@ class Context:
     bore_friction_coefficient: float  # nominal mu_fb
     time_reference: float  # s, middle of the training data (where drifts are zero)
     hose_resistance_share: float = 0.3  # -, R_t / (R_r + R_v + R_t): the hose's part of R
+    reference_compliance: float = 5.0e-14  # m^3/Pa, C_b of the rig file at 0.9 MPa mean p_i
 
 
 def rig_context(rig: Rig, flow_amplitude: float, time_reference: float) -> Context:
@@ -79,6 +82,7 @@ def rig_context(rig: Rig, flow_amplitude: float, time_reference: float) -> Conte
         bore_friction_coefficient=rig.bore_friction_coefficient,
         time_reference=time_reference,
         hose_resistance_share=hose / total,
+        reference_compliance=derive_parameters(rig).bore_compliance,
     )
 
 
@@ -132,6 +136,9 @@ class Candidate:
     recording only by moving one of them far that way out of its tolerance names this physics
     in the calibration's terms, not a parameter error (the wider-priors check of
     ``physics_checks``)."""
+    retired_parameters: ClassVar[tuple[str, ...]] = ()
+    """Parameter names of an older law of this physics that no longer means the same: a model
+    file that has one is refused (``improved_model``), not run with another meaning."""
 
     @property
     def name(self) -> str:

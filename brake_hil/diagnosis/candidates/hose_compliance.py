@@ -50,19 +50,26 @@ class HoseCompliance(Candidate):
     rubber hose wall is viscoelastic: part of its swell ``C_d`` follows the pressure with a
     retardation time ``tau_w`` (a Kelvin-Voigt element; Covas et al., J. Hydraulic Research
     42(5), 2004), so the stored volume and the bore pressure's lag depend on the frequency.
+    The wall's swell does not change with pressure (SAE J1401 rates a brake hose by one
+    volumetric expansion per pressure and length), unlike the bore's compliance, which the air
+    sets (eq. 18): so ``C_h`` is a multiple of one fixed compliance, the rig file's ``C_b``
+    at 0.9 MPa, not of each segment's ``C_b``. (Scaled with each segment's ``C_b``, the node
+    left family b's hoses 3-19 times the noise where the fixed one leaves 2-8, and a late
+    ``p_i`` explained two strong ones better: seed 1701.)
     """
 
     entry = CATALOGUE["hose_compliance"]
     own_rig_values = (("hose_stiffness", -1),)  # a hose that swells more has a softer wall
+    retired_parameters = ("hose_compliance_ratio",)  # a multiple of each segment's C_b
     parameters = (
-        CandidateParameter("hose_compliance_ratio", "-", 0.02, 20.0, 0.5, logarithmic=True),
+        CandidateParameter("hose_wall_ratio", "-", 0.02, 20.0, 0.5, logarithmic=True),
         CandidateParameter("hose_creep_ratio", "-", 0.01, 5.0, 0.3, True, absent=0.0),
         CandidateParameter("hose_creep_time", "s", 0.002, 0.3, 0.02, True, absent=0.02),
     )
 
     def fill(self, draft: Draft, theta: FloatArray, context: Context) -> None:
-        """A hose node whose compliance is a multiple of the bore's, part of it retarded."""
-        compliance = theta[:, 0] * np.array([p.bore_compliance for p in draft.params])
+        """A hose node of a fixed multiple of the reference compliance, part of it retarded."""
+        compliance = theta[:, 0] * context.reference_compliance
         share = np.full(len(draft.params), context.hose_resistance_share)
         draft.add(HoseNode(compliance, share, theta[:, 1] * compliance, theta[:, 2]))
 
