@@ -176,6 +176,18 @@ def test_a_late_master_cylinder_pressure_is_not_named_a_hose(tmp_path: Path) -> 
     assert rivals and rivals[0].passed, hose.checks
 
 
+def test_a_strong_family_b_hose_on_the_restricted_rig_is_the_hose(tmp_path: Path) -> None:
+    """Case 252 of ``brake-hil cases --family b --seed 1701``, a strong creeping hose behind
+    the restricted valve, was named ``sensor_delay`` at 0.82: with a node compliance scaled
+    by each segment's ``C_b``, which the air makes fall with pressure, the hose left 6.6
+    times the noise and every output led alike (a late ``p_i``) left 3.2. The wall's swell
+    does not change with pressure; fixed, the hose leaves 1.6 and is named."""
+    hose = _planned_case(tmp_path, "b", 1701, 252, "hose_compliance")
+    assert hose.effects == ("hose_compliance",), hose.explanation
+    rivals = [c for c in hose.checks["hose_compliance"] if c.name == "rivals"]
+    assert rivals and rivals[0].passed, hose.checks
+
+
 def test_a_delay_beside_a_hose_is_named_but_not_sure(tmp_path: Path) -> None:
     """A creeping hose beside a late ``p_b`` (case 49 of ``brake-hil cases --family b --seed
     1001``): the delay alone leaves 2 times the noise, so the pair can never be named, and
