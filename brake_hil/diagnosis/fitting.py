@@ -81,6 +81,7 @@ class Model:
         self.context = make_context(calibration, dataset)
         self.sizes = [len(c.parameters) for c in self.candidates]
         self.preroll = max([PREROLL, *(c.lead_in for c in self.candidates)])
+        self.lookahead = max([0.0, *(c.lookahead for c in self.candidates)])
         self.pressure_ceiling = 1.2 * float(np.max(dataset.pressure))
 
     @property
@@ -152,13 +153,15 @@ class Model:
     def _span(self, window: Window, span: float | None) -> tuple[int, int, BoolArray]:
         """First and end sample simulated for ``window``, and the mask of those inside it.
 
-        The simulation starts ``preroll`` seconds before the window.
+        The simulation starts ``preroll`` seconds before the window and ends ``lookahead``
+        seconds after it (or at the recording's end).
         """
         ds = self.dataset
         end = window.end if span is None else min(window.end, window.start + span)
         first = int(np.searchsorted(ds.time, window.start - self.preroll))
-        last = int(np.searchsorted(ds.time, end - 1e-9))
-        inside = ds.time[first:last] >= window.start - 1e-9
+        last = int(np.searchsorted(ds.time, end + self.lookahead - 1e-9))
+        time = ds.time[first:last]
+        inside = (time >= window.start - 1e-9) & (time < end - 1e-9)
         return first, last, inside
 
     def simulate_windows(

@@ -136,6 +136,10 @@ class Candidate:
     recording only by moving one of them far that way out of its tolerance names this physics
     in the calibration's terms, not a parameter error (the wider-priors check of
     ``physics_checks``)."""
+    lookahead: ClassVar[float] = 0.0
+    """Future (s) its output transform reads (an output advanced in time): a fit's run goes
+    on this long past its window, so the last samples of the window are simulated, not held at
+    the run's final value (``fitting.Model``)."""
     retired_parameters: ClassVar[tuple[str, ...]] = ()
     """Parameter names of an older law of this physics that no longer means the same: a model
     file that has one is refused (``improved_model``), not run with another meaning."""

@@ -47,6 +47,7 @@ class LateInput(Rival):
         CandidateParameter("input_advance", "s", 0.0, 0.02, 0.002),
         CandidateParameter("input_filter_time", "s", 0.0, 0.01, 0.0005),
     )
+    lookahead = 0.021  # the longest advance and a sample for the lead's slope
     told_apart = 2.0  # what a candidate must cut the baseline's error by (ACCEPT_RATIO)
     why = "a hose adds lag to every output, it cannot make them lead"
     unlike = "too short a lead for a late input"

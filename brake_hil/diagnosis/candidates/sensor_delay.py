@@ -27,6 +27,8 @@ creeping hose 0.34-0.71, falling with amplitude as a loop of fixed width read as
 Two first versions also judged skews under ``SKEW_THRESHOLD``, then the common delay of a
 late ``p_i``; each set aside a true late ``p_i`` on a fresh seed.)"""
 CHANNELS = ("p_b", "F_k", "x_c")
+LONGEST_DELAY = 0.02
+"""s, the bound of each channel's delay either way."""
 
 
 def _skews(theta: FloatArray) -> FloatArray:
@@ -46,8 +48,10 @@ class SensorDelay(Candidate):
 
     entry = CATALOGUE["sensor_delay"]
     parameters = tuple(
-        CandidateParameter(f"delay_{channel}", "s", -0.02, 0.02, 0.0) for channel in CHANNELS
+        CandidateParameter(f"delay_{channel}", "s", -LONGEST_DELAY, LONGEST_DELAY, 0.0)
+        for channel in CHANNELS
     )
+    lookahead = LONGEST_DELAY  # a negative delay reads the run ahead
 
     def fill(self, draft: Draft, theta: FloatArray, context: Context) -> None:
         """Delay each output channel."""
