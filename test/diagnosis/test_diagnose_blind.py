@@ -176,16 +176,23 @@ def test_a_late_master_cylinder_pressure_is_not_named_a_hose(tmp_path: Path) -> 
     assert rivals and rivals[0].passed, hose.checks
 
 
-def test_a_strong_family_b_hose_on_the_restricted_rig_is_the_hose(tmp_path: Path) -> None:
+def test_a_family_b_hose_on_the_restricted_rig_is_told_from_a_late_input(tmp_path: Path) -> None:
     """Case 252 of ``brake-hil cases --family b --seed 1701``, a strong creeping hose behind
     the restricted valve, was named ``sensor_delay`` at 0.82: with a node compliance scaled
     by each segment's ``C_b``, which the air makes fall with pressure, the hose left 6.6
     times the noise and every output led alike (a late ``p_i``) left 3.2. The wall's swell
-    does not change with pressure; fixed, the hose leaves 1.6 and is named."""
+    does not change with pressure; fixed, the hose leaves 1.6, and a late ``p_i`` fitted in
+    its place (read past the window's end) 1.68 times that: told apart at 1.5, it is named.
+    A true late ``p_i`` on that rig (seed 1601, case 174, named a hose at 0.85: the late
+    ``p_i`` left 1.11 times the hose's error) is not."""
     hose = _planned_case(tmp_path, "b", 1701, 252, "hose_compliance")
     assert hose.effects == ("hose_compliance",), hose.explanation
     rivals = [c for c in hose.checks["hose_compliance"] if c.name == "rivals"]
     assert rivals and rivals[0].passed, hose.checks
+    late = _planned_case(tmp_path, "b", 1601, 174, "sensor_delay")
+    assert "hose_compliance" not in late.effects, late.explanation
+    rivals = [c for c in late.checks["hose_compliance"] if c.name == "rivals"]
+    assert rivals and not rivals[0].passed and "p_i acquired" in rivals[0].finding, late.checks
 
 
 def test_a_delay_beside_a_hose_is_named_but_not_sure(tmp_path: Path) -> None:
