@@ -191,6 +191,20 @@ def test_a_delay_is_the_same_at_every_amplitude() -> None:
     # (a true late p_i of family b came out 0.11, 0.84, 0.95 ms)
     drifting_lead = np.array([[-0.11e-3] * 3, [-0.84e-3] * 3, [-0.95e-3] * 3])
     assert delay.segments_disagree(drifting_lead) is None
+    # nor a skew well under a common lead of every output (a late p_i through family b's
+    # filter, b1701 case 137: p_b leads 0.72, 0.51, 0.37 ms less than the others) ...
+    filtered_lead = np.array(
+        [
+            [-2.68e-3, -3.52e-3, -3.40e-3],
+            [-2.74e-3, -3.33e-3, -3.25e-3],
+            [-2.80e-3, -3.24e-3, -3.17e-3],
+        ]
+    )
+    assert delay.segments_disagree(filtered_lead) is None
+    # ... but the same skew with the outputs on time is a shrinking skew
+    on_time = filtered_lead - np.median(filtered_lead, axis=1)[:, None]
+    finding = delay.segments_disagree(on_time)
+    assert finding is not None and "skew of p_b" in finding
     # a true late x_c (b801 case 79): p_b's calibrated phase moves with the segment, and
     # beside it F_k looks skewed -0.68, -0.56, -0.44 ms; only the most skewed channel, x_c,
     # is judged, and it holds
