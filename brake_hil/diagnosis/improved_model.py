@@ -84,13 +84,14 @@ def read_improved_model(path: Path) -> ImprovedModel:
             raise ImprovedModelError(f"{path}: unknown effect '{unknown[0]}'")
         parameters = {str(k): float(v) for k, v in document["parameters"].items()}
         for name in effects:
-            retired = [p for p in candidate(name).retired_parameters if p in parameters]
+            model = candidate(name)
+            retired = [p for p in model.retired_parameters if p in parameters]
             if retired:
                 raise ImprovedModelError(
                     f"{path}: '{retired[0]}' of {name} is from an older law of that effect;"
                     " diagnose the recording again to write a current model"
                 )
-            for parameter in candidate(name).parameters:
+            for parameter in model.parameters:
                 if parameter.name not in parameters and parameter.absent is not None:
                     parameters[parameter.name] = parameter.absent  # an older file's model
                 elif parameter.name not in parameters:

@@ -16,6 +16,8 @@ from brake_hil.physics.catalogue import EffectEntry, Quantity
 from brake_hil.topics import OUTPUT_CHANNELS
 from brake_hil.types import FloatArray
 
+LONGEST_ADVANCE = 0.02
+"""s, the bound of the fitted advance of ``p_i``."""
 SHORTEST_LEAD = 0.5e-3
 """s: a lead (advance plus filter) shorter than this is no late input (``sensor_delay``'s
 skew threshold)."""
@@ -43,10 +45,10 @@ class LateInput(Rival):
 
     entry = LATE_INPUT
     parameters = (
-        CandidateParameter("input_advance", "s", 0.0, 0.02, 0.002),
+        CandidateParameter("input_advance", "s", 0.0, LONGEST_ADVANCE, 0.002),
         CandidateParameter("input_filter_time", "s", 0.0, 0.01, 0.0005),
     )
-    lookahead = 0.021  # the longest advance and a sample for the lead's slope
+    lookahead = LONGEST_ADVANCE + 1e-3  # and a sample for the lead's slope
     told_apart = 1.5
     """A hose must leave this many times less held-out error than a late ``p_i`` (the bar a
     candidate clears over a baseline clearly above the noise, ``CLEAR_ACCEPT_RATIO``). Measured

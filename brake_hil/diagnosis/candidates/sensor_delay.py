@@ -27,6 +27,9 @@ creeping hose 0.34-0.71, falling with amplitude as a loop of fixed width read as
 Two first versions also judged skews under ``SKEW_THRESHOLD``, then the common delay of a
 late ``p_i``; each set aside a true late ``p_i`` on a fresh seed.)"""
 CHANNELS = ("p_b", "F_k", "x_c")
+LATE_INPUT_SKEW_SHARE = 0.5
+"""A skew under this share of a lead common to every output is a late ``p_i``'s filter passed
+differently by each output (:meth:`SensorDelay.segments_disagree`)."""
 LONGEST_DELAY = 0.02
 """s, the bound of each channel's delay either way."""
 
@@ -85,7 +88,9 @@ class SensorDelay(Candidate):
             return None
         skews = delays - np.median(delays, axis=1, keepdims=True)
         lead = -np.max(delays, axis=1)  # the least every output leads by, segment by segment
-        if np.all(lead > SKEW_THRESHOLD) and np.all(np.max(np.abs(skews), axis=1) < 0.5 * lead):
+        if np.all(lead > SKEW_THRESHOLD) and np.all(
+            np.max(np.abs(skews), axis=1) < LATE_INPUT_SKEW_SHARE * lead
+        ):
             return None  # a late p_i
         most = int(np.argmax(np.mean(np.abs(skews), axis=0)))
         skew = skews[:, most]
