@@ -10,7 +10,7 @@ against what the source published and the model predicted).
 
 Variants:
 
-* ``before``: as on main before this change: rmw's own transports for
+* ``before``: the alternative to the loopback profile: rmw's own transports for
   ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` (``BRAKE_HIL_DDS_PROFILE=off``), the source's
   and the model's loops spinning the last 150 us before each deadline.
 * ``after``: the project's loopback profile (one UDPv4 transport on 127.0.0.1) and the loops

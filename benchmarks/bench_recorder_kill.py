@@ -2,7 +2,7 @@
 
 For each setting (``chunk_bytes``, ``flush_interval_s``) and each of ``--kills`` runs: start
 the recorder (its own process, loopback DDS, a fresh domain), publish the six sample topics
-of interface.md and ``/diagnostics`` at 1 kHz from this process (7 000 messages/s, CDR), and
+of docs/interface.md and ``/diagnostics`` at 1 kHz from this process (7 000 messages/s, CDR), and
 ``SIGKILL`` the recorder at a random moment 1.5-3.5 s into the stream. Lost = published
 before the kill - recovered from the files (every whole chunk, read as the project's reader
 reads an unfinished recording), per topic; reported as the maximum over the topics of each

@@ -9,7 +9,7 @@ bash scripts/setup.sh
 # Any ROS node a test starts talks over loopback only (no multicast on the network).
 export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
 # One command a line: under set -e a failure inside an && list (but its last) does not stop
-# the script, and ruff's findings went unnoticed so (2026-11-27).
+# the script.
 echo "== ruff"
 .venv/bin/ruff check .
 .venv/bin/ruff format --check .

@@ -1,5 +1,6 @@
 """The package's layers: the core imports without ROS, no module imports one that imports it
-back, and no lower layer imports a higher one (style.md; README, Layout)."""
+back, no lower layer imports a higher one, and no module is over ``MAX_MODULE_LINES``
+(docs/development.md, House style; README, Layout)."""
 
 from __future__ import annotations
 
@@ -40,6 +41,9 @@ ROS_FREE = (
     "app",
 )
 """Subpackages that must import with rclpy unimportable (with ``cli`` and ``report``)."""
+
+MAX_MODULE_LINES = 600
+"""A module over this many lines holds more than one concern: split it."""
 
 
 def module_name(path: Path) -> str:
@@ -155,3 +159,12 @@ def test_every_folder_of_the_package_is_a_package_that_says_what_it_exports() ->
     folders = [p for p in PACKAGE.rglob("*") if p.is_dir() and p.name != "__pycache__"]
     assert [str(f) for f in folders if not (f / "__init__.py").is_file()] == []
     assert [str(f) for f in folders if "__all__" not in (f / "__init__.py").read_text()] == []
+
+
+def test_no_module_is_over_the_line_limit() -> None:
+    lengths = {
+        path.relative_to(PACKAGE.parent).as_posix(): len(path.read_text().splitlines())
+        for path in sorted(PACKAGE.rglob("*.py"))
+    }
+    too_long = [f"{name}: {n} lines" for name, n in lengths.items() if n > MAX_MODULE_LINES]
+    assert too_long == [], f"over {MAX_MODULE_LINES} lines: split by concern"
