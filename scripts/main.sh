@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Set up (first run), then the main job on a bundled recording of the virtual rig (the seed's
+# Set up (first run), then the main job on a bundled recording of the virtual rig (the paper's
 # one-washer rig, air-driven, seals that stick and slip):
 #   1. the node chain replays it: pressure_source -> caliper_model (the rig file's LTI model)
 #      -> comparator -> recorder, each its own process on loopback DDS; prints the comparison

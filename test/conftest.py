@@ -4,7 +4,7 @@
 diagnosis blind on whole recordings, or fuzz: ``pytest -m "not slow"`` is the inner loop,
 ``bash scripts/test.sh`` (and CI) runs everything. A test module joins the slow ones by its
 path in ``SLOW_PATHS``, a single test by its name in ``SLOW_TESTS``, and every test that uses
-a fixture of ``SLOW_FIXTURES`` is slow too.
+a fixture of ``SLOW_FIXTURES`` or a parametrisation of ``SLOW_PARAMETERS`` is slow too.
 """
 
 from __future__ import annotations
@@ -38,17 +38,38 @@ SLOW_PATHS: tuple[str, ...] = (
     "test/virtual_rig/test_fleet.py",  # a virtual lab recorded and diagnosed
     "test/results/test_trend_command.py",  # a fleet diagnosed for its trend
     "test/test_new_effect.py",  # a tenth effect recorded and diagnosed blind
+    "test/cli/test_regress.py",  # the bundled recordings replayed in subprocesses
+    "test/test_flake8.py",  # the ROS 2 linters over the tree (ruff checks the same rules)
+    "test/test_pep257.py",
 )
 """Test modules (paths from the checkout, a folder ending in ``/``) that are slow as a whole."""
 
 SLOW_TESTS: tuple[str, ...] = (
+    # brake-hil diagnose, benchmark or cases in a subprocess
     "test_diagnose_on_a_parameter_error_only_finds_no_missing_physics",
     "test_diagnose_and_benchmark_refuse_bad_input_with_one_line",
+    "test_benchmark_of_one_null_case_shows_progress_and_n_a_for_empty_categories",
+    "test_cases_command_writes_family_b_cases",
+    "test_cases_writes_recordings_and_labels_apart",
+    # blind diagnoses in this process
+    "test_a_blind_diagnosis_of_a_strong_leak_names_no_library_effect",
+    "test_an_internal_error_on_one_case_is_recorded_the_rest_scored_and_exit_is_1",
+    # the README's command blocks and benchmark scripts, each in a subprocess
+    "test_readme_command_works_as_written",
+    "test_each_benchmark_the_readme_names_starts_as_written",
+    # a fresh interpreter per subpackage, rclpy blocked
+    "test_core_imports_without_rclpy",
+    # the stiff reference solver (Radau) on whole runs
+    "test_batch_and_stepper_match_stiff_solver_on_rig_input",
+    "test_air_driven_model_matches_stiff_solver",
 )
-"""Single slow tests, by function name: each runs ``brake-hil diagnose`` in a subprocess."""
+"""Single slow tests, by function name (every parametrisation of it)."""
 
-SLOW_FIXTURES: tuple[str, ...] = ("postgres_server",)
-"""Fixtures that start a process of their own (a database server)."""
+SLOW_FIXTURES: tuple[str, ...] = ("postgres_server", "postgres_url", "family_b_cases")
+"""Fixtures that start a process of their own (a database server) or diagnose recordings."""
+
+SLOW_PARAMETERS: tuple[str, ...] = ("postgresql",)
+"""Parametrisations that start a process of their own (the PostgreSQL backend)."""
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -69,16 +90,12 @@ def _is_slow(item: pytest.Item) -> bool:
         return True
     if any(fixture in getattr(item, "fixturenames", ()) for fixture in SLOW_FIXTURES):
         return True
-    command = getattr(getattr(item, "callspec", None), "params", {}).get("command")
-    if where == "test/test_readme.py" and isinstance(command, str):
-        from test.test_readme import is_long
-
-        return is_long(command)
-    return False
+    parameters = getattr(getattr(item, "callspec", None), "params", {})
+    return any(value in SLOW_PARAMETERS for value in parameters.values() if isinstance(value, str))
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    """Mark the slow tests (``SLOW_PATHS``, ``SLOW_TESTS``, ``SLOW_FIXTURES``, long README blocks)."""
+    """Mark ``slow`` what the ``SLOW_*`` tuples above name."""
     del config
     for item in items:
         if _is_slow(item):

@@ -1,9 +1,9 @@
 """Every command block of the README works as written on a clean checkout.
 
 The fast blocks run always; the long ones (those holding a marker of ``LONG``: the main job,
-the CAN chain, the benchmarks) only with ``BRAKE_HIL_README_LONG=1``, and are marked ``slow``
-(``test/conftest.py``). ``bash scripts/test.sh`` is this test suite itself and is
-never run from it. Without ``.venv/`` in the checkout (a developer's worktree), ``.venv/bin/``
+the CAN chain, the benchmarks) only with ``BRAKE_HIL_README_LONG=1``. Each block runs in a
+subprocess, so these tests are marked ``slow`` (``test/conftest.py``). ``bash
+scripts/test.sh`` is this test suite itself and is never run from it. Without ``.venv/`` in the checkout (a developer's worktree), ``.venv/bin/``
 stands for this interpreter's ``python`` and ``brake-hil``, and ``bash scripts/run_chain.sh``
 for the launcher it ``exec``s after its set-up step.
 """
@@ -22,6 +22,7 @@ import pytest
 from test.conftest import PROJECT
 
 README = PROJECT / "README.md"
+BENCHMARKS = PROJECT / "docs" / "benchmarks.md"
 LONG = (
     "scripts/main.sh",
     "--can-emulator",
@@ -44,7 +45,7 @@ def readme_commands() -> list[str]:
     return [line for line in lines if line and not line.startswith("#")]
 
 
-def is_long(command: str) -> bool:
+def _is_long(command: str) -> bool:
     """Whether a README command is a long one (it holds a marker of ``LONG``)."""
     return any(marker in command for marker in LONG)
 
@@ -74,7 +75,7 @@ def _as_run_here(command: str, shim: Path) -> str:
 
 def test_the_readme_has_fast_command_blocks() -> None:
     commands = readme_commands()
-    fast = [c for c in commands if not is_long(c) and not any(n in c for n in NEVER)]
+    fast = [c for c in commands if not _is_long(c) and not any(n in c for n in NEVER)]
     assert any("regress bags/" in c for c in fast)
     assert any("run_chain.sh" in c for c in fast)
     assert any("main.sh" in c for c in commands)
@@ -84,7 +85,7 @@ def test_the_readme_has_fast_command_blocks() -> None:
 def test_readme_command_works_as_written(command: str, tmp_path: Path) -> None:
     if any(marker in command for marker in NEVER):
         pytest.skip("the test suite itself")
-    if is_long(command) and os.environ.get("BRAKE_HIL_README_LONG") != "1":
+    if _is_long(command) and os.environ.get("BRAKE_HIL_README_LONG") != "1":
         pytest.skip("long: set BRAKE_HIL_README_LONG=1")
     env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
     env["PYTHONPATH"] = str(PROJECT)
@@ -106,8 +107,9 @@ def test_readme_command_works_as_written(command: str, tmp_path: Path) -> None:
 
 
 def _benchmark_scripts() -> list[str]:
-    """The benchmark scripts the README's commands run."""
-    found = re.findall(r"benchmarks/bench_\w+\.py", README.read_text())
+    """The benchmark scripts the README's and docs/benchmarks.md's commands run."""
+    text = README.read_text() + BENCHMARKS.read_text()
+    found = re.findall(r"benchmarks/bench_\w+\.py", text)
     return sorted(set(found))
 
 
