@@ -3,9 +3,10 @@
 The fast blocks run always; the long ones (those holding a marker of ``LONG``: the main job,
 the CAN chain, the benchmarks) only with ``BRAKE_HIL_README_LONG=1``. Each block runs in a
 subprocess, so these tests are marked ``slow`` (``test/conftest.py``). ``bash
-scripts/test.sh`` is this test suite itself and is never run from it. Without ``.venv/`` in the checkout (a developer's worktree), ``.venv/bin/``
-stands for this interpreter's ``python`` and ``brake-hil``, and ``bash scripts/run_chain.sh``
-for the launcher it ``exec``s after its set-up step.
+scripts/test.sh`` is this test suite itself and is never run from it. Without ``.venv/`` in
+the checkout (a developer's worktree), ``.venv/bin/`` stands for this interpreter's ``python``
+and ``brake-hil``, and ``bash scripts/run_chain.sh`` for the launcher it ``exec``s after its
+set-up step.
 """
 
 from __future__ import annotations
