@@ -10,6 +10,7 @@ import pytest
 
 from brake_hil.analysis.signals import lowpass
 from brake_hil.diagnosis import diagnose as diagnosis
+from brake_hil.diagnosis import verdict as rules
 from brake_hil.diagnosis.dataset import Dataset, Window
 from brake_hil.diagnosis.diagnose import Hypothesis, Summary, decide
 from brake_hil.topics import OUTPUT_CHANNELS
@@ -66,9 +67,9 @@ def test_a_pair_is_found_when_neither_effect_alone_clears_acceptance() -> None:
 
 def test_a_fit_that_hurts_one_held_out_window_is_refused(monkeypatch: pytest.MonkeyPatch) -> None:
     patchy = single("sensor_delay", BASE / 3, (BASE / 8, BASE / 0.7, BASE / 8))
-    monkeypatch.setattr(diagnosis, "WINDOW_FLOOR", 0.9)
+    monkeypatch.setattr(rules, "WINDOW_FLOOR", 0.9)
     assert decide(summary(patchy)).effects == ()
-    monkeypatch.setattr(diagnosis, "WINDOW_FLOOR", 0.5)
+    monkeypatch.setattr(rules, "WINDOW_FLOOR", 0.5)
     assert decide(summary(patchy)).effects == ("sensor_delay",)
 
 
