@@ -146,7 +146,6 @@ def held_out_metrics(model: Model, theta: FloatArray) -> Metrics:
 Progress = Callable[[str], None]
 
 
-
 def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -> Diagnosis:
     """Diagnose one recording against its (nominal) rig file."""
     say = progress or (lambda message: None)
@@ -339,4 +338,3 @@ def fit_pairs(
         model = Model(calibration, [candidate(n) for n in names], dataset)
         pairs.extend(_try_fit(model, start, unfitted, say))
     return pairs
-

@@ -244,4 +244,3 @@ def _explain(
             f" ({'seen in the evidence' if seen else 'not clearly seen in the evidence'})."
         )
     return " ".join(parts)
-

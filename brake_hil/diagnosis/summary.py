@@ -204,7 +204,6 @@ def summarise(
     )
 
 
-
 def ratio(reference: float, cost: float) -> float:
     """How many times ``cost`` is below ``reference`` (held-out improvement)."""
     return reference / max(cost, 1e-18)
@@ -222,5 +221,3 @@ def not_alone(fit: Fit) -> str | None:
         return None
     member, own = next(own_columns([candidate(fit.effects[0])], fit.theta))
     return member.not_alone(own)
-
-

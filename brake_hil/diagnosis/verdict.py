@@ -242,9 +242,7 @@ class _Standing:
         )
         eligible = [h for h in ranked if _admissible(summary, h)]
         passing = [
-            h
-            for h in eligible
-            if _gain(summary, h) >= required and _holds_everywhere(summary, h)
+            h for h in eligible if _gain(summary, h) >= required and _holds_everywhere(summary, h)
         ]
         return _Standing(
             required=required,
@@ -317,9 +315,7 @@ def _caps(summary: Summary, standing: _Standing) -> list[float]:
     return cap
 
 
-def _named(
-    summary: Summary, standing: _Standing, chosen: Hypothesis, cap: list[float]
-) -> Verdict:
+def _named(summary: Summary, standing: _Standing, chosen: Hypothesis, cap: list[float]) -> Verdict:
     """The verdict naming ``chosen``, sure by its smallest margin from the rules."""
     log_gains = standing.log_gains
     own = log_gains[chosen.effects]
@@ -382,9 +378,7 @@ def _not_named(summary: Summary, standing: _Standing, cap: list[float]) -> Verdi
     log_gains, passing, required = standing.log_gains, standing.passing, standing.required
     # the fall-through's nearest miss of the required ratio (the passing ones missed the form
     # bar instead: their distance from it is the cap)
-    best = max(
-        (log_gains[h.effects] for h in standing.eligible if h not in passing), default=0.0
-    )
+    best = max((log_gains[h.effects] for h in standing.eligible if h not in passing), default=0.0)
     beyond = (
         math.log(max(summary.baseline_nrmse, 1e-12) / UNEXPLAINED_NRMSE),
         math.log(max(summary.form_gain, 1e-12) / STRUCTURED_RATIO),

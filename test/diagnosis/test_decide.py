@@ -338,8 +338,8 @@ def test_a_generic_form_that_is_the_effects_own_physics_does_not_count_against_i
 
 
 def test_a_pair_is_no_surer_than_its_second_effect_is_told_from_another() -> None:
-    """Seed 1201 (family a): eccentric load + hose named eccentric load + sensor delay at
-    0.98, the pair with the hose 3 times behind. A pair that keeps one effect and swaps the
+    """An eccentric load with a hose, where the pair eccentric load + sensor delay scores 3
+    times above the pair with the hose, at 0.98. A pair that keeps one effect and swaps the
     other is a rival of the second effect's identity: the nearer it comes, the less sure."""
     eccentric, delay = single("eccentric_load", BASE / 14), single("sensor_delay", BASE / 1.3)
     hose = single("hose_compliance", BASE / 1.2)
@@ -356,9 +356,9 @@ def test_a_pair_is_no_surer_than_its_second_effect_is_told_from_another() -> Non
 
 
 def test_a_strong_single_that_a_pair_betters_is_named_but_unsure() -> None:
-    """Seed 1401 (family b): bore friction under an eccentric load named eccentric load alone
-    at 0.9+ (the pair cut what the eccentric load left 1.94 times, but explained too little of
-    the baseline's error for PAIR_SHARE). Named alone, no surer than a stand-in's replacement,
+    """Bore friction under an eccentric load, where the eccentric load alone would be named
+    at 0.9+ (the pair cuts what the eccentric load leaves 1.94 times, but explains too little
+    of the baseline's error for PAIR_SHARE). Named alone, no surer than a stand-in's replacement,
     and the doubt names the second effect; a pair that cuts it little changes nothing, nor
     does one under a single that leaves the noise alone."""
     quiet = dataclasses.replace(summary(), noise_cost=BASE / 1e4)
