@@ -4,7 +4,7 @@ A candidate that cuts the held-out error may still be a *stand-in*: a flexible t
 absorbs a misfit of another cause. Five checks, each on the fitted hypothesis, none reading
 a label. (One more comparison, against the generic forms of the misfit, needs only numbers
 of the summary and is in the decision itself, for every hypothesis:
-:data:`brake_hil.diagnosis.diagnose.FORM_RATIO`.)
+:data:`brake_hil.diagnosis.thresholds.FORM_RATIO`.)
 
 * **Channels** (:func:`channel_check`): the error it removes is on the channels its physics
   reaches (the catalogue entry's ``channels``), not almost all on others.

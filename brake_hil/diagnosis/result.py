@@ -68,7 +68,7 @@ class Diagnosis:
         )
 
     def as_dict(self) -> dict[str, object]:
-        """JSON of interface.md's ``diagnosis.json`` (with more keys)."""
+        """JSON of docs/interface.md's ``diagnosis.json`` (with more keys)."""
         ranked = sorted(self.hypotheses, key=lambda h: fit_score(self.baseline, h), reverse=True)
         return {
             "recording": self.recording,
@@ -141,7 +141,7 @@ class Diagnosis:
         return {"not_sure_alone": doubt, **second}
 
     def _unexplained_form(self) -> dict[str, object]:
-        """``verdict.unexplained_form`` (interface.md) when unexplained and a form stands out."""
+        """``verdict.unexplained_form``: unexplained, and a form stands out (docs/interface.md)."""
         if self.residual is None or self.effects != ("unexplained",):
             return {}
         entry = self.residual.verdict_entry()

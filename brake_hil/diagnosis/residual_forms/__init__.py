@@ -1,7 +1,7 @@
 """What an ``unexplained`` misfit looks like, and which generic physical form explains it best.
 
 When no candidate of the library explains the calibrated LTI baseline's misfit, the verdict is
-``unexplained``; this module says what that misfit is in physical terms (docs/interface.md:
+``unexplained``; this package says what that misfit is in physical terms (docs/interface.md:
 ``verdict.unexplained_form``). It takes the dataset and the baseline's predictions of every
 output channel over the training and held-out windows, and
 

@@ -86,7 +86,7 @@ class ResidualDescription:
         return replace(self, summary=summary)
 
     def verdict_entry(self) -> dict[str, object] | None:
-        """``verdict.unexplained_form`` of interface.md (None when nothing stands out)."""
+        """``verdict.unexplained_form`` of docs/interface.md (None when nothing stands out)."""
         if self.best is None:
             return None
         return {
