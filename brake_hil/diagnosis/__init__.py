@@ -1,7 +1,8 @@
 """Finding the physics the LTI model left out. ROS-free.
 
-Candidate models and their engine, the calibration, fitting, evidence, the verdict and the
-improved model's file.
+Candidate models and their engine, the calibration, fitting, evidence, the generic forms of a
+misfit, the verdict, its physics checks, and the result with the improved model's file
+(docs/diagnosis.md).
 """
 
 from __future__ import annotations
@@ -15,4 +16,10 @@ __all__ = [
     "evidence",
     "fitting",
     "improved_model",
+    "physics_checks",
+    "residual_forms",
+    "result",
+    "summary",
+    "thresholds",
+    "verdict",
 ]

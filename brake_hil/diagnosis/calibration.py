@@ -2,7 +2,7 @@
 
 The rig file is nominal; the seed identifies its uncertain parameters from data. Here the
 uncertain ones are fitted by least squares on the training windows, each as a log-multiplier
-of its nominal value with a Gaussian prior of the rig's one-sigma tolerance (interface.md):
+of its nominal value with a Gaussian prior of the rig's one-sigma tolerance (docs/interface.md):
 caliper stiffness ``k_c``, needle-valve resistance ``R_v``, the seal's ``k_eh`` and ``c_eh``,
 the fluid's air fraction (eq. 18: it sets ``C_b`` and ``C_i`` at every pressure, so an
 error in it changes the compliance more at low pressure than at high, which one multiplier of
@@ -65,7 +65,7 @@ def uncertain_values(rig: Rig) -> tuple[Uncertain, ...]:
     """The calibrated values of a rig file.
 
     A value whose tolerance the rig file sets to 0 is held fixed at its nominal value
-    (interface.md: tolerance 0 means known exactly): it is left out of the calibration and
+    (docs/interface.md: tolerance 0 means known exactly): it is left out of the calibration and
     of every candidate's fit.
     """
     values: tuple[Uncertain, ...] = UNCERTAIN

@@ -93,161 +93,198 @@ def collect(
     ``k_eh_by_segment`` pairs each segment's bore-pressure peak-to-peak (Pa) with its
     characterised ``k_eh`` (N/m), for the amplitude trend.
     """
-    ds: Dataset = model.dataset
     parts = segment_signals(model, theta)
-    scale = ds.scale()
-    values: dict[str, float] = {}
-    findings: list[str] = []
-    rate = 1.0 / ds.sample_time
+    found = _Findings(model.dataset, parts)
+    channels, worst = found.overall()
+    windows = found.per_segment(worst)
+    profile = found.phase(worst)
+    harmonics = found.harmonics()
+    found.amplitude_trend(k_eh_by_segment)
+    found.drift()
+    found.lags()
+    return Evidence(found.values, found.findings, channels, windows, profile, harmonics)
 
-    residuals = {
-        key: np.concatenate([(p.predicted[key] - p.measured[key]) / scale[key] for p in parts])
-        for key in OUTPUT_CHANNELS
-    }
-    nrmse = {key: float(np.sqrt(np.mean(r**2))) for key, r in residuals.items()}
-    for key in OUTPUT_CHANNELS:
-        values[f"nrmse_{key}"] = nrmse[key]
-    channels = sorted(
-        (k for k in OUTPUT_CHANNELS if nrmse[k] > MISMATCH_NRMSE), key=lambda k: -nrmse[k]
-    )
-    worst = max(nrmse, key=lambda k: nrmse[k])
-    findings.append(
-        "calibrated LTI baseline's RMS residual over the steady cycles, in % of the whole "
-        "recording's peak-to-peak (the fits' measure, not the seed's per-cycle NRMSE): "
-        + ", ".join(f"{k} {100 * v:.2f} %" for k, v in nrmse.items())
-        + (f"; mismatched: {', '.join(channels)}" if channels else "; no channel above 1 %")
-    )
-    noise = ds.noise_cost()
-    misfit = float(np.mean([v**2 for v in nrmse.values()]))
-    values["noise_nrmse"] = float(np.sqrt(noise))
-    values["misfit_over_noise"] = misfit / max(noise, 1e-18)
-    findings.append(
-        f"measurement noise (cycle-to-cycle): {100 * np.sqrt(noise):.3f} % of peak-to-peak; the "
-        f"baseline's squared error is {values['misfit_over_noise']:.1f} times the noise's"
-    )
 
-    # Per segment, and where in time.
-    windows: list[tuple[float, float]] = []
-    per_segment = []
-    for part in parts:
-        seg = {
-            k: float(np.sqrt(np.mean(((part.predicted[k] - part.measured[k]) / scale[k]) ** 2)))
-            for k in OUTPUT_CHANNELS
+class _Findings:
+    """The evidence's numbers and sentences, gathered step by step over the segments."""
+
+    def __init__(self, dataset: Dataset, parts: list[SegmentSignals]) -> None:
+        self.ds = dataset
+        self.parts = parts
+        self.scale = dataset.scale()
+        self.values: dict[str, float] = {}
+        self.findings: list[str] = []
+
+    def overall(self) -> tuple[list[str], str]:
+        """Each channel's RMS residual and the noise: the mismatched channels and the worst."""
+        values, parts, scale = self.values, self.parts, self.scale
+        residuals = {
+            key: np.concatenate([(p.predicted[key] - p.measured[key]) / scale[key] for p in parts])
+            for key in OUTPUT_CHANNELS
         }
-        per_segment.append(seg)
-        if seg[worst] > MISMATCH_NRMSE:
-            windows.append((part.window.start, part.window.end))
-    if len(parts) > 1:
-        findings.append(
-            f"{worst} RMS residual per segment, same measure (mean p_i): "
-            + ", ".join(
-                f"{100 * s[worst]:.2f} % ({p.window.mean_pressure / 1e6:.2f} MPa)"
-                for s, p in zip(per_segment, parts)
-            )
+        nrmse = {key: float(np.sqrt(np.mean(r**2))) for key, r in residuals.items()}
+        for key in OUTPUT_CHANNELS:
+            values[f"nrmse_{key}"] = nrmse[key]
+        channels = sorted(
+            (k for k in OUTPUT_CHANNELS if nrmse[k] > MISMATCH_NRMSE), key=lambda k: -nrmse[k]
         )
-        first, last = per_segment[0][worst], per_segment[-1][worst]
-        average = float(np.mean([s[worst] for s in per_segment]))
-        values["segment_trend"] = (last - first) / max(average, 1e-12)
+        worst = max(nrmse, key=lambda k: nrmse[k])
+        self.findings.append(
+            "calibrated LTI baseline's RMS residual over the steady cycles, in % of the whole "
+            "recording's peak-to-peak (the fits' measure, not the seed's per-cycle NRMSE): "
+            + ", ".join(f"{k} {100 * v:.2f} %" for k, v in nrmse.items())
+            + (f"; mismatched: {', '.join(channels)}" if channels else "; no channel above 1 %")
+        )
+        noise = self.ds.noise_cost()
+        misfit = float(np.mean([v**2 for v in nrmse.values()]))
+        values["noise_nrmse"] = float(np.sqrt(noise))
+        values["misfit_over_noise"] = misfit / max(noise, 1e-18)
+        self.findings.append(
+            f"measurement noise (cycle-to-cycle): {100 * np.sqrt(noise):.3f} % of peak-to-peak; "
+            f"the baseline's squared error is {values['misfit_over_noise']:.1f} times the noise's"
+        )
+        return channels, worst
 
-    # Phase of the 5 Hz cycle.
-    profile: dict[str, list[float]] = {}
-    for key in OUTPUT_CHANNELS:
-        bins = np.zeros(PHASE_BINS)
-        counts = np.zeros(PHASE_BINS)
+    def per_segment(self, worst: str) -> list[tuple[float, float]]:
+        """The worst channel's residual per segment and its trend; the mismatched windows (s)."""
+        parts, scale = self.parts, self.scale
+        windows: list[tuple[float, float]] = []
+        per_segment = []
         for part in parts:
-            phase = _input_phase(part.time, part.pressure, ds.period)
-            index = np.minimum((phase / (2 * np.pi) * PHASE_BINS).astype(int), PHASE_BINS - 1)
-            r = (part.predicted[key] - part.measured[key]) / scale[key]
-            np.add.at(bins, index, r**2)
-            np.add.at(counts, index, 1)
-        profile[key] = np.sqrt(bins / np.maximum(counts, 1)).tolist()
-    peak_bin = int(np.argmax(profile[worst]))
-    concentration = max(profile[worst]) / max(float(np.mean(profile[worst])), 1e-12)
-    values["phase_concentration"] = float(concentration)
-    values["phase_peak_deg"] = float((peak_bin + 0.5) * 360.0 / PHASE_BINS)
-    findings.append(
-        f"{worst} residual peaks at {values['phase_peak_deg']:.0f} deg of the input cycle "
-        f"(0 deg: p_i rising through its mean), {concentration:.1f} times its cycle mean"
-    )
+            seg = {
+                k: float(
+                    np.sqrt(np.mean(((part.predicted[k] - part.measured[k]) / scale[k]) ** 2))
+                )
+                for k in OUTPUT_CHANNELS
+            }
+            per_segment.append(seg)
+            if seg[worst] > MISMATCH_NRMSE:
+                windows.append((part.window.start, part.window.end))
+        if len(parts) > 1:
+            self.findings.append(
+                f"{worst} RMS residual per segment, same measure (mean p_i): "
+                + ", ".join(
+                    f"{100 * s[worst]:.2f} % ({p.window.mean_pressure / 1e6:.2f} MPa)"
+                    for s, p in zip(per_segment, parts)
+                )
+            )
+            first, last = per_segment[0][worst], per_segment[-1][worst]
+            average = float(np.mean([s[worst] for s in per_segment]))
+            self.values["segment_trend"] = (last - first) / max(average, 1e-12)
+        return windows
 
-    # Harmonics (Table 1): growth from input to output, measured against predicted.
-    harmonics: dict[str, dict[str, list[float]]] = {"measured": {}, "predicted": {}}
-
-    def shares(signal: FloatArray) -> FloatArray:
-        return signals.harmonic_energy_shares(signal, rate, 1.0 / ds.period)
-
-    for key in ("p_i", *OUTPUT_CHANNELS):
-        measured_shares = np.mean(
-            [shares(p.pressure if key == "p_i" else p.measured[key]) for p in parts], axis=0
+    def phase(self, worst: str) -> dict[str, list[float]]:
+        """RMS residual per phase bin of the 5 Hz input cycle, by channel; where it peaks."""
+        profile: dict[str, list[float]] = {}
+        for key in OUTPUT_CHANNELS:
+            bins = np.zeros(PHASE_BINS)
+            counts = np.zeros(PHASE_BINS)
+            for part in self.parts:
+                phase = _input_phase(part.time, part.pressure, self.ds.period)
+                index = np.minimum((phase / (2 * np.pi) * PHASE_BINS).astype(int), PHASE_BINS - 1)
+                r = (part.predicted[key] - part.measured[key]) / self.scale[key]
+                np.add.at(bins, index, r**2)
+                np.add.at(counts, index, 1)
+            profile[key] = np.sqrt(bins / np.maximum(counts, 1)).tolist()
+        peak_bin = int(np.argmax(profile[worst]))
+        concentration = max(profile[worst]) / max(float(np.mean(profile[worst])), 1e-12)
+        self.values["phase_concentration"] = float(concentration)
+        self.values["phase_peak_deg"] = float((peak_bin + 0.5) * 360.0 / PHASE_BINS)
+        self.findings.append(
+            f"{worst} residual peaks at {self.values['phase_peak_deg']:.0f} deg of the input "
+            f"cycle (0 deg: p_i rising through its mean), {concentration:.1f} times its cycle mean"
         )
-        predicted_shares = np.mean(
-            [shares(p.pressure if key == "p_i" else p.predicted[key]) for p in parts], axis=0
-        )
-        harmonics["measured"][key] = measured_shares.tolist()
-        harmonics["predicted"][key] = predicted_shares.tolist()
-    input_super = 100.0 - harmonics["measured"]["p_i"][0]
-    for key in OUTPUT_CHANNELS:
-        measured = np.array(harmonics["measured"][key])
-        predicted = np.array(harmonics["predicted"][key])
-        growth = (100.0 - measured[0]) - (100.0 - predicted[0])
-        values[f"harmonic_growth_{key}"] = float(growth)
-        values[f"even_harmonics_{key}"] = float(
-            (measured[1] + measured[3]) - (predicted[1] + predicted[3])
-        )
-    findings.append(
-        "super-harmonic energy (10-25 Hz) beyond the model's: "
-        + ", ".join(f"{k} {values[f'harmonic_growth_{k}']:+.2f} %" for k in OUTPUT_CHANNELS)
-        + f" (input p_i carries {input_super:.2f} %)"
-    )
+        return profile
 
-    # Amplitude dependence of k_eh (Table 3).
-    if len(k_eh_by_segment) >= 2:
+    def harmonics(self) -> dict[str, dict[str, list[float]]]:
+        """Harmonics (seed Table 1): growth from input to output, measured against predicted."""
+        parts, values = self.parts, self.values
+        harmonics: dict[str, dict[str, list[float]]] = {"measured": {}, "predicted": {}}
+        rate = 1.0 / self.ds.sample_time
+
+        def shares(signal: FloatArray) -> FloatArray:
+            return signals.harmonic_energy_shares(signal, rate, 1.0 / self.ds.period)
+
+        for key in ("p_i", *OUTPUT_CHANNELS):
+            measured_shares = np.mean(
+                [shares(p.pressure if key == "p_i" else p.measured[key]) for p in parts], axis=0
+            )
+            predicted_shares = np.mean(
+                [shares(p.pressure if key == "p_i" else p.predicted[key]) for p in parts], axis=0
+            )
+            harmonics["measured"][key] = measured_shares.tolist()
+            harmonics["predicted"][key] = predicted_shares.tolist()
+        input_super = 100.0 - harmonics["measured"]["p_i"][0]
+        for key in OUTPUT_CHANNELS:
+            measured = np.array(harmonics["measured"][key])
+            predicted = np.array(harmonics["predicted"][key])
+            growth = (100.0 - measured[0]) - (100.0 - predicted[0])
+            values[f"harmonic_growth_{key}"] = float(growth)
+            values[f"even_harmonics_{key}"] = float(
+                (measured[1] + measured[3]) - (predicted[1] + predicted[3])
+            )
+        self.findings.append(
+            "super-harmonic energy (10-25 Hz) beyond the model's: "
+            + ", ".join(f"{k} {values[f'harmonic_growth_{k}']:+.2f} %" for k in OUTPUT_CHANNELS)
+            + f" (input p_i carries {input_super:.2f} %)"
+        )
+        return harmonics
+
+    def amplitude_trend(self, k_eh_by_segment: list[tuple[float, float]]) -> None:
+        """Amplitude dependence of ``k_eh`` (seed Table 3), with two segments or more."""
+        if len(k_eh_by_segment) < 2:
+            return
         amplitude = np.array([a for a, _ in k_eh_by_segment])
         stiffness = np.array([k for _, k in k_eh_by_segment])
         slope = np.polyfit(np.log(amplitude), np.log(np.maximum(stiffness, 1.0)), 1)[0]
-        values["k_eh_trend"] = float(slope)
-        findings.append(
+        self.values["k_eh_trend"] = float(slope)
+        self.findings.append(
             f"k_eh changes as (bore peak-to-peak)^{slope:+.2f} across the segments "
             "(an LTI seal gives 0; stick-slip friction makes it fall)"
         )
 
-    # Drift over the recording: the per-cycle peak-to-peak ratio's trend.
-    drift = 0.0
-    duration = ds.segments[-1].end - ds.segments[0].start
-    for key in OUTPUT_CHANNELS:
-        times, ratios = [], []
-        for part in parts:
-            for start in np.arange(
-                part.window.start, part.window.end - ds.period + 1e-9, ds.period
-            ):
-                cycle = (part.time >= start) & (part.time < start + ds.period)
-                measured_ptp = np.ptp(part.measured[key][cycle])
-                if measured_ptp > 0:
-                    times.append(start)
-                    ratios.append(np.ptp(part.predicted[key][cycle]) / measured_ptp)
-        if len(times) > 4:
-            within = _within_segment_slope(np.array(times), np.array(ratios), parts)
-            drift_key = float(within * duration)
-            values[f"drift_{key}"] = drift_key
-            if abs(drift_key) > abs(drift):
-                drift = drift_key
-    values["drift"] = drift
-    findings.append(
-        f"within-segment drift of the predicted/measured peak-to-peak ratio over the "
-        f"recording: {100 * drift:+.1f} %"
-    )
+    def drift(self) -> None:
+        """Drift over the recording: the per-cycle peak-to-peak ratio's trend in segments."""
+        ds, parts = self.ds, self.parts
+        drift = 0.0
+        duration = ds.segments[-1].end - ds.segments[0].start
+        for key in OUTPUT_CHANNELS:
+            times, ratios = [], []
+            for part in parts:
+                for start in np.arange(
+                    part.window.start, part.window.end - ds.period + 1e-9, ds.period
+                ):
+                    cycle = (part.time >= start) & (part.time < start + ds.period)
+                    measured_ptp = np.ptp(part.measured[key][cycle])
+                    if measured_ptp > 0:
+                        times.append(start)
+                        ratios.append(np.ptp(part.predicted[key][cycle]) / measured_ptp)
+            if len(times) > 4:
+                within = _within_segment_slope(np.array(times), np.array(ratios), parts)
+                drift_key = float(within * duration)
+                self.values[f"drift_{key}"] = drift_key
+                if abs(drift_key) > abs(drift):
+                    drift = drift_key
+        self.values["drift"] = drift
+        self.findings.append(
+            f"within-segment drift of the predicted/measured peak-to-peak ratio over the "
+            f"recording: {100 * drift:+.1f} %"
+        )
 
-    # Lags.
-    for key in OUTPUT_CHANNELS:
-        lag = np.mean([_lag(p.predicted[key], p.measured[key], ds.sample_time) for p in parts])
-        values[f"lag_{key}_ms"] = float(1e3 * lag)
-    lags = [values[f"lag_{k}_ms"] for k in OUTPUT_CHANNELS]
-    values["lag_spread_ms"] = float(max(lags) - min(lags))
-    findings.append(
-        "measured behind predicted: "
-        + ", ".join(f"{k} {values[f'lag_{k}_ms']:+.2f} ms" for k in OUTPUT_CHANNELS)
-    )
-    return Evidence(values, findings, channels, windows, profile, harmonics)
+    def lags(self) -> None:
+        """How far each measured channel lags its prediction (ms), and their spread."""
+        values = self.values
+        for key in OUTPUT_CHANNELS:
+            lag = np.mean(
+                [_lag(p.predicted[key], p.measured[key], self.ds.sample_time) for p in self.parts]
+            )
+            values[f"lag_{key}_ms"] = float(1e3 * lag)
+        lags = [values[f"lag_{k}_ms"] for k in OUTPUT_CHANNELS]
+        values["lag_spread_ms"] = float(max(lags) - min(lags))
+        self.findings.append(
+            "measured behind predicted: "
+            + ", ".join(f"{k} {values[f'lag_{k}_ms']:+.2f} ms" for k in OUTPUT_CHANNELS)
+        )
 
 
 def _input_phase(time: FloatArray, pressure: FloatArray, period: float) -> FloatArray:

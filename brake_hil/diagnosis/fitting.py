@@ -5,7 +5,7 @@ start-up transient has died away inside the window (the LTI model's slowest mode
 about 0.1 s; a slider settles within one cycle), or from longer before when a candidate's
 memory forgets its start more slowly (``Candidate.lead_in``: a seal seat that creeps over a
 second). Training windows are capped at ``FIT_SPAN`` seconds, which keeps a fit to a few
-seconds on this machine; held-out windows are scored whole.
+seconds; held-out windows are scored whole.
 """
 
 from __future__ import annotations
@@ -293,70 +293,104 @@ def fit(model: Model, start: FloatArray | None = None, max_iterations: int = 15)
         FitError: the simulation is not finite at the model's own start either, or the
             solver fails on it.
     """
-    ds = model.dataset
     name = " + ".join(model.names) or "the LTI baseline"
-    specs = model.parameters()
-    own = model.effect_size
-    sigma = model.prior_sigmas()
-    lower = np.array([np.log(lo) if log else lo for _, _, lo, _, log in specs])
-    upper = np.array([np.log(hi) if log else hi for _, _, _, hi, log in specs])
-    x0 = np.clip(_to_search(model, model.start() if start is None else start), lower, upper)
-    width = upper - lower
-    steps = 1e-3 * np.maximum(width, 1e-6)
-    cache: dict[bytes, FloatArray] = {}
-
-    def rows(x: FloatArray) -> FloatArray:
-        points = [x] + [_step(x, j, steps[j], upper) for j in range(x.size)]
-        return np.array(points)
-
-    def objective(points: FloatArray) -> FloatArray:
-        thetas = np.array([_from_search(model, r) for r in points])
-        data = model.residuals(ds.train, thetas, FIT_SPAN, FIT_DECIMATION)
-        data = data / (MODEL_ERROR * np.sqrt(data.shape[1]))
-        return np.hstack([data, points[:, own:] / sigma])
-
-    def evaluate(x: FloatArray) -> FloatArray:
-        key = x.tobytes()
-        if key not in cache:
-            cache.clear()
-            cache[key] = objective(rows(x))
-        return cache[key]
-
-    def searched(x: FloatArray) -> FloatArray:
-        values = evaluate(x)
-        return np.where(np.isfinite(values), values, NOT_FINITE_RESIDUAL)
-
-    def residual(x: FloatArray) -> FloatArray:
-        return np.asarray(searched(x)[0], dtype=float)
-
-    def jacobian(x: FloatArray) -> FloatArray:
-        r = searched(x)
-        actual = np.array([_step(x, j, steps[j], upper)[j] - x[j] for j in range(x.size)])
-        return np.asarray((r[1:] - r[0]).T / actual, dtype=float)
-
+    search = _Search(model)
+    x0 = search.clipped(model.start() if start is None else start)
     with np.errstate(over="ignore", invalid="ignore"):  # non-finite is handled here
-        if not np.all(np.isfinite(evaluate(x0)[0])) and start is not None:
-            x0 = np.clip(_to_search(model, model.start()), lower, upper)  # the model's own start
-        if not np.all(np.isfinite(evaluate(x0)[0])):
+        if not np.all(np.isfinite(search.evaluate(x0)[0])) and start is not None:
+            x0 = search.clipped(model.start())  # the model's own start
+        if not np.all(np.isfinite(search.evaluate(x0)[0])):
             raise FitError(f"{name}: the model's simulation is not finite where its fit starts")
         try:
             result = scipy.optimize.least_squares(
-                residual,
+                search.residual,
                 x0,
-                jac=jacobian,
-                bounds=(lower, upper),
+                jac=search.jacobian,
+                bounds=(search.lower, search.upper),
                 method="trf",
                 max_nfev=max_iterations,
-                x_scale=width / 4,
+                x_scale=search.width / 4,
             )
         except (ValueError, np.linalg.LinAlgError) as error:
             raise FitError(f"{name}: the fit failed: {error}") from error
+    return _scored(model, name, result, search.sigma.size)
+
+
+class _Search:
+    """The fit's problem in the search space (logarithms where a parameter is logarithmic).
+
+    Residuals and their forward-difference Jacobian come from one batch simulation of the
+    point and its steps, cached for the point last asked.
+    """
+
+    def __init__(self, model: Model) -> None:
+        specs = model.parameters()
+        self.model = model
+        self.own = model.effect_size
+        self.sigma = model.prior_sigmas()
+        self.lower = np.array([np.log(lo) if log else lo for _, _, lo, _, log in specs])
+        self.upper = np.array([np.log(hi) if log else hi for _, _, _, hi, log in specs])
+        self.width = self.upper - self.lower
+        self.steps = 1e-3 * np.maximum(self.width, 1e-6)
+        self._cache: dict[bytes, FloatArray] = {}
+
+    def clipped(self, theta: FloatArray) -> FloatArray:
+        """``theta`` (natural units) in the search space, within the bounds."""
+        return np.clip(_to_search(self.model, theta), self.lower, self.upper)
+
+    def rows(self, x: FloatArray) -> FloatArray:
+        """The point and its step along every parameter."""
+        points = [x] + [_step(x, j, self.steps[j], self.upper) for j in range(x.size)]
+        return np.array(points)
+
+    def objective(self, points: FloatArray) -> FloatArray:
+        """Scaled data residuals and the multipliers' prior, one row per point."""
+        model = self.model
+        thetas = np.array([_from_search(model, r) for r in points])
+        data = model.residuals(model.dataset.train, thetas, FIT_SPAN, FIT_DECIMATION)
+        data = data / (MODEL_ERROR * np.sqrt(data.shape[1]))
+        return np.hstack([data, points[:, self.own :] / self.sigma])
+
+    def evaluate(self, x: FloatArray) -> FloatArray:
+        """:meth:`objective` of :meth:`rows` of ``x``, cached."""
+        key = x.tobytes()
+        if key not in self._cache:
+            self._cache.clear()
+            self._cache[key] = self.objective(self.rows(x))
+        return self._cache[key]
+
+    def searched(self, x: FloatArray) -> FloatArray:
+        """:meth:`evaluate`, a value that is not finite counting ``NOT_FINITE_RESIDUAL``."""
+        values = self.evaluate(x)
+        return np.where(np.isfinite(values), values, NOT_FINITE_RESIDUAL)
+
+    def residual(self, x: FloatArray) -> FloatArray:
+        """The residuals at ``x``."""
+        return np.asarray(self.searched(x)[0], dtype=float)
+
+    def jacobian(self, x: FloatArray) -> FloatArray:
+        """Forward differences of the residuals at ``x``."""
+        r = self.searched(x)
+        upper, steps = self.upper, self.steps
+        actual = np.array([_step(x, j, steps[j], upper)[j] - x[j] for j in range(x.size)])
+        return np.asarray((r[1:] - r[0]).T / actual, dtype=float)
+
+
+def _scored(model: Model, name: str, result: scipy.optimize.OptimizeResult, priors: int) -> Fit:
+    """The solver's ``result`` as a :class:`Fit`, scored on the held-out windows.
+
+    ``priors``: the prior residuals at the end of ``result.fun`` (one per multiplier).
+
+    Raises:
+        FitError: the fitted model's simulation is not finite on the held-out windows.
+    """
+    specs = model.parameters()
     theta = _from_search(model, result.x)
-    data_part = result.fun[: result.fun.size - sigma.size] * MODEL_ERROR
+    data_part = result.fun[: result.fun.size - priors] * MODEL_ERROR
     train_cost = float(np.sum(data_part**2))
     uncertainty = _uncertainty(model, result.jac, theta, train_cost, data_part.size)
     with np.errstate(over="ignore", invalid="ignore"):
-        nrmse, window_costs = model.scores(ds.held_out, theta)
+        nrmse, window_costs = model.scores(model.dataset.held_out, theta)
     if not all(np.isfinite(v) for v in (*nrmse.values(), *window_costs)):
         raise FitError(f"{name}: the fitted model's simulation is not finite on held-out data")
     return Fit(

@@ -4,7 +4,7 @@ A candidate that cuts the held-out error may still be a *stand-in*: a flexible t
 absorbs a misfit of another cause. Five checks, each on the fitted hypothesis, none reading
 a label. (One more comparison, against the generic forms of the misfit, needs only numbers
 of the summary and is in the decision itself, for every hypothesis:
-:data:`brake_hil.diagnosis.diagnose.FORM_RATIO`.)
+:data:`brake_hil.diagnosis.thresholds.FORM_RATIO`.)
 
 * **Channels** (:func:`channel_check`): the error it removes is on the channels its physics
   reaches (the catalogue entry's ``channels``), not almost all on others.
@@ -72,11 +72,12 @@ __all__ = [
 ]
 
 LEFTOVER_RATIO = 2.0
-"""A form its physics leaves no room for that cuts what it leaves on a channel this many times
-(``ACCEPT_RATIO``: as much as a candidate must cut to be named) marks a stand-in. Measured
-2026-11-26: a resonance on what a true sensor delay leaves on its skewed channel 0.91-1.10
-(15 recordings of both families); on a pressure tap's resonance named ``sensor_delay``
-1.46-7.9."""
+"""Cut of what a hypothesis leaves on a channel, by a form its physics leaves no room for,
+that marks it a stand-in (``ACCEPT_RATIO``: as much as a candidate must cut to be named).
+
+A real effect leaves noise there; a stand-in leaves the structure of the physics it stands in
+for. Evidence: docs/diagnosis.md.
+"""
 UNREACHED_SHARE = 0.8
 """Share of the removed error on channels the effect does not reach that marks a stand-in."""
 SEGMENT_SIGMAS = 4.0
@@ -89,25 +90,22 @@ PRIOR_WIDENING = 2.0
 FREED_WIDENING = 3.0
 """... and of a value the recording does not identify."""
 OUT_OF_TOLERANCE_SIGMAS = 5.0
-"""A freed baseline that needs a rig value this many of its tolerance's sigmas from the rig
-file's (the calibration's prior) explains the misfit by no parameter error within tolerance:
-the check does not set the candidate aside for it, provided that value does the explaining (as
-for ``OWN_VALUE_SIGMAS``; since 2026-11-27: on an out-of-library recording the hose stiffness
-drifted 8 sigmas in a freed baseline that cut the error 1.01 times). (Measured on 64 virtual-rig
-recordings of both families, 2026-11-25: the freed baselines of 32 nulls moved a value at most
-4.3 sigmas, an air fraction the recording does not identify; of 32 hose singles, 23 moved the
-hose stiffness 5.2-19.8 sigmas.)"""
+"""Distance (sigmas of its tolerance) of a rig value a freed baseline needs, beyond which it
+explains the misfit by no parameter error within tolerance.
+
+The wider-priors check does not set a candidate aside for such a baseline, provided that value
+does the explaining (as for ``OWN_VALUE_SIGMAS``). Evidence: docs/diagnosis.md.
+"""
 OWN_VALUE_SIGMAS = 3.0
-"""A freed baseline that needs a rig value of the candidate's own physics (``own_rig_values``:
-a hose's wall stiffness) this many sigmas of its tolerance from the rig file's, the way that
-physics moves it, describes that physics, not a parameter error within tolerance: the check
-does not set the candidate aside for it, provided that value is what does the explaining (with
-it held to its tolerance and the others freed, the candidate cuts the error as required; a value
-the recording hardly sees drifts far in a freed fit without explaining anything). Measured
-2026-11-27 on seeds 1501 and 1601, both families: the freed baselines of 96 nulls moved the hose
-stiffness -1.4 to +1.5 sigmas; of the 7 family-b hoses this check set aside, 6 moved it -3.0 to
--4.7 (softer) and cut the error 3.6-6.4 times; out-of-library physics (48 recordings) let it
-drift -13 to +14 sigmas while cutting the error at most 1.08 times."""
+"""Distance (sigmas of its tolerance) of a rig value of the candidate's own physics
+(``own_rig_values``: a hose's wall stiffness), moved the way that physics moves it, beyond
+which a freed baseline describes that physics, not a parameter error within tolerance.
+
+The check does not set the candidate aside for it, provided that value does the explaining:
+held to its tolerance with the others freed, the candidate still cuts the error as required
+(a value the recording hardly sees drifts far without explaining anything).
+Evidence: docs/diagnosis.md.
+"""
 IDENTIFIABLE_SHARE = 0.5
 """A calibrated value is identified when the data shrink its sigma below this share of the
 prior's (posterior from the calibration's Jacobian, prior included)."""

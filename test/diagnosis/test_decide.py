@@ -10,6 +10,7 @@ import pytest
 
 from brake_hil.analysis.signals import lowpass
 from brake_hil.diagnosis import diagnose as diagnosis
+from brake_hil.diagnosis import verdict as rules
 from brake_hil.diagnosis.dataset import Dataset, Window
 from brake_hil.diagnosis.diagnose import Hypothesis, Summary, decide
 from brake_hil.topics import OUTPUT_CHANNELS
@@ -66,9 +67,9 @@ def test_a_pair_is_found_when_neither_effect_alone_clears_acceptance() -> None:
 
 def test_a_fit_that_hurts_one_held_out_window_is_refused(monkeypatch: pytest.MonkeyPatch) -> None:
     patchy = single("sensor_delay", BASE / 3, (BASE / 8, BASE / 0.7, BASE / 8))
-    monkeypatch.setattr(diagnosis, "WINDOW_FLOOR", 0.9)
+    monkeypatch.setattr(rules, "WINDOW_FLOOR", 0.9)
     assert decide(summary(patchy)).effects == ()
-    monkeypatch.setattr(diagnosis, "WINDOW_FLOOR", 0.5)
+    monkeypatch.setattr(rules, "WINDOW_FLOOR", 0.5)
     assert decide(summary(patchy)).effects == ("sensor_delay",)
 
 
@@ -337,8 +338,8 @@ def test_a_generic_form_that_is_the_effects_own_physics_does_not_count_against_i
 
 
 def test_a_pair_is_no_surer_than_its_second_effect_is_told_from_another() -> None:
-    """Seed 1201 (family a): eccentric load + hose named eccentric load + sensor delay at
-    0.98, the pair with the hose 3 times behind. A pair that keeps one effect and swaps the
+    """An eccentric load with a hose, where the pair eccentric load + sensor delay scores 3
+    times above the pair with the hose, at 0.98. A pair that keeps one effect and swaps the
     other is a rival of the second effect's identity: the nearer it comes, the less sure."""
     eccentric, delay = single("eccentric_load", BASE / 14), single("sensor_delay", BASE / 1.3)
     hose = single("hose_compliance", BASE / 1.2)
@@ -355,9 +356,9 @@ def test_a_pair_is_no_surer_than_its_second_effect_is_told_from_another() -> Non
 
 
 def test_a_strong_single_that_a_pair_betters_is_named_but_unsure() -> None:
-    """Seed 1401 (family b): bore friction under an eccentric load named eccentric load alone
-    at 0.9+ (the pair cut what the eccentric load left 1.94 times, but explained too little of
-    the baseline's error for PAIR_SHARE). Named alone, no surer than a stand-in's replacement,
+    """Bore friction under an eccentric load, where the eccentric load alone would be named
+    at 0.9+ (the pair cuts what the eccentric load leaves 1.94 times, but explains too little
+    of the baseline's error for PAIR_SHARE). Named alone, no surer than a stand-in's replacement,
     and the doubt names the second effect; a pair that cuts it little changes nothing, nor
     does one under a single that leaves the noise alone."""
     quiet = dataclasses.replace(summary(), noise_cost=BASE / 1e4)

@@ -2,7 +2,7 @@
 
 Each case is a recording and the nominal rig file in a folder of its own; the labels are
 written apart and read only by the scorer after every verdict is in. The full benchmark is
-`brake-hil benchmark` (README); this keeps a fast, fixed slice of it in CI.
+`brake-hil benchmark` (docs/diagnosis.md); this keeps a fast, fixed slice of it in CI.
 """
 
 from __future__ import annotations
@@ -102,8 +102,7 @@ def test_a_load_cells_hysteresis_is_not_named_a_sensor_delay(tmp_path: Path) -> 
     """Family b's load-cell hysteresis (out of the library) fits as a delay of a few tenths of
     a millisecond, but one that shrinks as the amplitude grows, and what it leaves rings: a
     physics check sets the delay aside (a delay is a time) and the verdict does not name it
-    (case 24 of
-    ``brake-hil cases --family b --seed 701``, named sensor_delay at 0.74 before the check)."""
+    (without the check, the case drawn here would be named sensor_delay at about 0.74)."""
     result = _planned_case(tmp_path, "b", 701, 24, "force_sensor_hysteresis")
     assert "sensor_delay" not in result.effects, result.explanation
     findings = [c.finding for c in result.checks.get("sensor_delay", []) if not c.passed]
@@ -118,9 +117,8 @@ def test_a_load_cells_hysteresis_is_not_named_a_sensor_delay(tmp_path: Path) -> 
 def test_a_resonant_pressure_tap_is_not_named_a_sensor_delay(tmp_path: Path) -> None:
     """Family b's pressure tap (out of the library: p_b read through a 17 Hz mode) lags p_b
     at the pulsing's frequency, so a delay of p_b cuts the error; but what the delay leaves
-    on p_b rings, and the leftover check sets it aside (case 51 of ``brake-hil cases
-    --family b --seed 702``, named sensor_delay at 0.66 before the check). A true delay of
-    x_c (case 1 of seed 703) leaves no ring and is still named."""
+    on p_b rings, and the leftover check sets it aside (without the check it would be named
+    sensor_delay at about 0.66). A true delay of x_c leaves no ring and is still named."""
     tap = _planned_case(tmp_path, "b", 702, 51, "pressure_tap_resonance")
     assert "sensor_delay" not in tap.effects, tap.explanation
     findings = [c.finding for c in tap.checks.get("sensor_delay", []) if not c.passed]
@@ -132,12 +130,12 @@ def test_a_resonant_pressure_tap_is_not_named_a_sensor_delay(tmp_path: Path) -> 
 
 
 def test_a_tap_that_rings_too_little_to_show_is_read_through_its_mode(tmp_path: Path) -> None:
-    """A subtle pressure tap (case 24 of ``brake-hil cases --family b --seed 901``: p_b read
-    through a 36 Hz mode, damping 0.12) leaves nothing the leftover check sees once p_b is
-    delayed 3.2 ms (and the seal's damping doubled to match its 2 % gain); named
-    ``sensor_delay`` at 0.78 before the rival check. Read through a mode of its own, with
+    """A subtle pressure tap (p_b read through a 36 Hz mode, damping 0.12) leaves nothing
+    the leftover check sees once p_b is delayed 3.2 ms (and the seal's damping doubled to
+    match its 2 % gain); without the rival check it would be named ``sensor_delay`` at about
+    0.78. Read through a mode of its own, with
     the calibration refitted, p_b fits better at the tap's frequency and damping, and the
-    delay is set aside. A true delay of p_b (case 7: a Butterworth chain, 3.4 ms) reads as
+    delay is set aside. A true delay of p_b (a Butterworth chain, 3.4 ms) reads as
     well through a well-damped mode only, and is still named."""
     from brake_hil.diagnosis.candidates.resonant_reading import LIGHT_DAMPING
 
@@ -159,13 +157,12 @@ def test_a_tap_that_rings_too_little_to_show_is_read_through_its_mode(tmp_path: 
 
 
 def test_a_late_master_cylinder_pressure_is_not_named_a_hose(tmp_path: Path) -> None:
-    """A ``p_i`` acquired 4 ms late (case 14 of ``brake-hil cases --family a --seed 901``: a
-    pure delay and a first-order filter) makes every output lead the prediction alike; a
-    creeping hose with a calibration of less lag of its own fitted it better than a pure delay
-    did, and it was named ``hose_compliance`` at 0.92. Fitted in the hose's place, every
-    output led alike explains it as well: the hose is set aside (a hose adds lag, it cannot
-    make the outputs lead). A true hose (case 3) leaves a late ``p_i`` no room and is still
-    named."""
+    """A ``p_i`` acquired 4 ms late (a pure delay and a first-order filter) makes every
+    output lead the prediction alike; a creeping hose with a calibration of less lag of its
+    own fits it better than a pure delay does (without the rival check it would be named
+    ``hose_compliance`` at about 0.92). Fitted in the hose's place, every output led alike
+    explains it as well: the hose is set aside (a hose adds lag, it cannot make the outputs
+    lead). A true hose leaves a late ``p_i`` no room and is still named."""
     late = _planned_case(tmp_path, "a", 901, 14, "sensor_delay")
     assert "hose_compliance" not in late.effects, late.explanation
     rivals = [c for c in late.checks["hose_compliance"] if c.name == "rivals"]
@@ -177,14 +174,13 @@ def test_a_late_master_cylinder_pressure_is_not_named_a_hose(tmp_path: Path) -> 
 
 
 def test_a_family_b_hose_on_the_restricted_rig_is_told_from_a_late_input(tmp_path: Path) -> None:
-    """Case 252 of ``brake-hil cases --family b --seed 1701``, a strong creeping hose behind
-    the restricted valve, was named ``sensor_delay`` at 0.82: with a node compliance scaled
-    by each segment's ``C_b``, which the air makes fall with pressure, the hose left 6.6
-    times the noise and every output led alike (a late ``p_i``) left 3.2. The wall's swell
-    does not change with pressure; fixed, the hose leaves 1.6, and a late ``p_i`` fitted in
-    its place (read past the window's end) 1.68 times that: told apart at 1.5, it is named.
-    A true late ``p_i`` on that rig (seed 1601, case 174, named a hose at 0.85: the late
-    ``p_i`` left 1.11 times the hose's error) is not."""
+    """A strong creeping hose behind the restricted valve: the wall's swell does not change
+    with pressure (a node compliance scaled by each segment's ``C_b``, which the air makes
+    fall with pressure, would leave 6.6 times the noise, and a late ``p_i`` fits better).
+    With the wall's compliance fixed the hose leaves 1.6 times the noise, and a late ``p_i``
+    fitted in its place (read past the window's end) 1.68 times that: told apart at 1.5, the
+    hose is named. A true late ``p_i`` on that rig (a late ``p_i`` leaves 1.11 times the
+    hose's error) is not named a hose."""
     hose = _planned_case(tmp_path, "b", 1701, 252, "hose_compliance")
     assert hose.effects == ("hose_compliance",), hose.explanation
     rivals = [c for c in hose.checks["hose_compliance"] if c.name == "rivals"]
@@ -196,12 +192,11 @@ def test_a_family_b_hose_on_the_restricted_rig_is_told_from_a_late_input(tmp_pat
 
 
 def test_a_delay_beside_a_hose_is_named_but_not_sure(tmp_path: Path) -> None:
-    """A creeping hose beside a late ``p_b`` (case 49 of ``brake-hil cases --family b --seed
-    1001``): the delay alone leaves 2 times the noise, so the pair can never be named, and
-    the verdict ``sensor_delay`` came at 0.96. Its fitted delays are a skew of ``p_b`` and a
-    common lag of ``F_k`` and ``x_c`` (the hose's), which no one late channel makes: still
-    named, no surer than 0.71, and the explanation says what is beside it. A true late
-    ``F_k`` (case 14) stays sure."""
+    """A creeping hose beside a late ``p_b``: the delay alone leaves 2 times the noise, so
+    the pair can never be named, and ``sensor_delay`` is the verdict. Its fitted delays are
+    a skew of ``p_b`` and a common lag of ``F_k`` and ``x_c`` (the hose's), which no one late
+    channel makes: still named, no surer than 0.71, and the explanation says what is beside
+    it. A true late ``F_k`` stays sure."""
     from brake_hil.diagnosis.diagnose import STAND_IN_MARGIN, _confidence
     from brake_hil.report.diagnosis_report import write_report
 
@@ -223,10 +218,9 @@ def test_a_delay_beside_a_hose_is_named_but_not_sure(tmp_path: Path) -> None:
 
 def test_an_eccentric_loads_seating_share_is_followed_over_the_pressures(tmp_path: Path) -> None:
     """Family a's eccentric load seats hyperbolically (``F_0 / (F_0 + F)``); a share linear
-    in ``p_b`` left ``x_c`` 4.6-6.1 times better than the baseline (NRMSE, seed 1001's 24
-    eccentric singles); to second order in ``p_b`` (``share_curvature``) it follows the
-    seating over the recorded pressures (case 1 of ``brake-hil cases --family a --seed 1001``:
-    4.9 times before)."""
+    in ``p_b`` leaves ``x_c`` about 5 times better than the baseline (NRMSE); to second order
+    in ``p_b`` (``share_curvature``) it follows the seating over the recorded pressures, more
+    than 10 times better."""
     result = _planned_case(tmp_path, "a", 1001, 1, "eccentric_load")
     assert result.effects == ("eccentric_load",), result.explanation
     before, after = (
@@ -241,12 +235,12 @@ def test_an_eccentric_loads_seating_share_is_followed_over_the_pressures(tmp_pat
 def test_a_subtle_second_effect_under_a_strong_one_leaves_the_verdict_unsure(
     tmp_path: Path,
 ) -> None:
-    """An eccentric load with a little entrained air (case 244 of ``brake-hil cases --family a
-    --seed 1501``): the eccentric load alone cuts the error so much that a pair with it can
-    never be named (``PAIR_SHARE``), and those pairs went unfitted, the verdict at 0.90.
-    Fitted after all, the pair with the air cuts what the eccentric load leaves 2.7 times:
-    the eccentric load is still named, no surer than 0.71, and the verdict says which effect
-    may be beside it; the pairs stay charged as unnameable."""
+    """An eccentric load with a little entrained air: the eccentric load alone cuts the
+    error so much that a pair with it can never be named (``PAIR_SHARE``); unfitted, those
+    pairs would leave the verdict at 0.90. Fitted after all, the pair with the air cuts what
+    the eccentric load leaves 2.7 times: the eccentric load is still named, no surer than
+    0.71, and the verdict says which effect may be beside it; the pairs stay charged as
+    unnameable."""
     from brake_hil.diagnosis.diagnose import STAND_IN_MARGIN, _confidence
 
     result = _planned_case(tmp_path, "a", 1501, 244, "eccentric_load", "entrained_air")

@@ -62,8 +62,8 @@ def test_a_fit_whose_jacobian_steps_over_where_the_model_is_not_finite_is_still_
 ) -> None:
     """The start is finite, its forward step is not: the search steps back, no crash.
 
-    (Before: the start was refused, or a later Jacobian's NaN stopped the whole diagnosis
-    in the solver's SVD: family b, seed 1601, case 89.)
+    Neither is the start refused, nor does a later Jacobian's NaN stop the whole diagnosis in
+    the solver's SVD.
     """
     calibration, dataset = lti_model
     model = Model(calibration, [_CliffCandidate()], dataset)  # type: ignore[arg-type]
@@ -87,9 +87,8 @@ def test_a_late_input_is_fitted_to_the_noise_reading_the_run_past_its_window(
 ) -> None:
     """Every output leading alike (``p_i`` acquired 3 ms late) advances the run: the last
     milliseconds of each window come from past its end. Held at the run's final value
-    instead, the few samples at each window's end left 20 times the noise on seed 1701's
-    late ``p_i`` of family a (case 20; 1.5 read ahead): a hose fitted better (2.4), and was
-    named at 0.88."""
+    instead, the few samples at each window's end leave many times the noise on a late
+    ``p_i`` (about 20 times on family a), and a hose fits better."""
     from brake_hil.diagnosis.candidates import candidate
     from brake_hil.virtual_rig.effects import make_effect
     from brake_hil.virtual_rig.excitation import seed_pulsing

@@ -99,7 +99,7 @@ def test_a_value_of_the_candidates_own_physics_moved_its_way_counts_sooner() -> 
 
 @pytest.fixture(scope="module")
 def family_b_cases(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
-    """Two recordings of the family-b benchmark schedule of seed 1601 (its cases 13 and 25)."""
+    """Two recordings of family b's benchmark schedule: a subtle hose, a sensor's hysteresis."""
     from brake_hil.virtual_rig.cases import make_case, plan_cases
 
     root = tmp_path_factory.mktemp("family_b")
@@ -134,11 +134,11 @@ def _hose_prior_check(folder: Path, required: float = 1.5) -> tuple[float, Check
 def test_a_hose_the_freed_calibration_explains_only_as_a_softer_hose_is_the_hose(
     family_b_cases: dict[str, Path], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """Seed 1601's family-b case 13, a subtle creeping hose (strength 0.16): the hose cuts
-    the calibrated baseline's held-out error 6.5 times; with the priors freed the baseline comes
-    within 1.50 times of it (1.47 before the hose wall's compliance was fixed, 2026-11-27), but
-    only with the hose wall 3.9 sigmas softer than the rig file's: the hose's own physics, so
-    at the bar of 2 it is not set aside (it was, as a parameter error, before)."""
+    """Family b's subtle creeping hose (strength 0.16): the hose cuts the calibrated
+    baseline's held-out error 6.5 times; with the priors freed the baseline comes within 1.50
+    times of it, but only with the hose wall 3.9 sigmas softer than the rig file's: the
+    hose's own physics, so at the bar of 2 it is not set aside (without ``own_rig_values`` it
+    would be, as a parameter error)."""
     from brake_hil.diagnosis.candidates.hose_compliance import HoseCompliance
 
     gain, outcome = _hose_prior_check(family_b_cases["single"], required=2.0)
@@ -154,10 +154,10 @@ def test_a_hose_the_freed_calibration_explains_only_as_a_softer_hose_is_the_hose
 def test_a_value_that_drifts_without_explaining_does_not_pass_the_check(
     family_b_cases: dict[str, Path],
 ) -> None:
-    """Seed 1601's family-b case 25, out-of-library physics (a force sensor's hysteresis): the
-    freed baseline lets the hose wall drift 8 sigmas while cutting the error 1.01 times; held to
-    its tolerance the baseline is as good, so the drift explains nothing (before, any value 5
-    sigmas out passed the check)."""
+    """Family b's out-of-library physics (a force sensor's hysteresis): the freed baseline
+    lets the hose wall drift 8 sigmas while cutting the error 1.01 times; held to its tolerance
+    the baseline is as good, so the drift explains nothing (a value out of tolerance alone does
+    not pass the check)."""
     gain, outcome = _hose_prior_check(family_b_cases["unexplained"])
     assert gain < 1.5
     assert not outcome.passed
@@ -192,7 +192,7 @@ def test_a_delay_is_the_same_at_every_amplitude() -> None:
     drifting_lead = np.array([[-0.11e-3] * 3, [-0.84e-3] * 3, [-0.95e-3] * 3])
     assert delay.segments_disagree(drifting_lead) is None
     # nor a skew well under a common lead of every output (a late p_i through family b's
-    # filter, b1701 case 137: p_b leads 0.72, 0.51, 0.37 ms less than the others) ...
+    # filter: p_b leads 0.72, 0.51, 0.37 ms less than the others) ...
     filtered_lead = np.array(
         [
             [-2.68e-3, -3.52e-3, -3.40e-3],
@@ -205,7 +205,7 @@ def test_a_delay_is_the_same_at_every_amplitude() -> None:
     on_time = filtered_lead - np.median(filtered_lead, axis=1)[:, None]
     finding = delay.segments_disagree(on_time)
     assert finding is not None and "skew of p_b" in finding
-    # a true late x_c (b801 case 79): p_b's calibrated phase moves with the segment, and
+    # a true late x_c of family b: p_b's calibrated phase moves with the segment, and
     # beside it F_k looks skewed -0.68, -0.56, -0.44 ms; only the most skewed channel, x_c,
     # is judged, and it holds
     late_x_c = np.array(
@@ -226,10 +226,10 @@ def test_a_delay_is_the_same_at_every_amplitude() -> None:
 
 
 def test_a_skew_beside_a_common_lag_says_the_delay_is_not_alone() -> None:
-    """Fitted delays (s) of p_b, F_k, x_c, as fitted on seed 1001's recordings: one late
+    """Fitted delays (s) of p_b, F_k, x_c, as fitted on family b's recordings: one late
     channel, or every output leading alike (a late ``p_i``), is one delay; a skew beside a
-    common lag or lead of the other two outputs is two timing errors (hose + delay of p_b,
-    family b case 49; of F_k, case 89)."""
+    common lag or lead of the other two outputs is two timing errors (a hose beside a delay
+    of p_b, or of F_k)."""
     from brake_hil.diagnosis.candidates import candidate
 
     delay = candidate("sensor_delay")

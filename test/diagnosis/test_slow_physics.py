@@ -50,7 +50,7 @@ def test_a_rig_that_heats_up_is_fitted_with_its_heating_time(default_rig: Rig) -
     fitted = drift.parameters()
     assert fitted["heating_time"] == pytest.approx(15.0, rel=0.3)
     assert fitted["line_drift_rate"] < 0 and fitted["seal_drift_rate"] < 0  # it softens
-    assert baseline.held_out_cost / drift.held_out_cost > 60  # linear in time: 18 on a1601
+    assert baseline.held_out_cost / drift.held_out_cost > 60  # a drift linear in time: about 18
     # a model file older than the heating time reads as the linear drift it was
     assert heated_time(12.0, 5.0, LINEAR) == pytest.approx(7.0, rel=1e-6)
     assert heated_time(12.0, 5.0, 15.0) < 7.0

@@ -1,0 +1,246 @@
+"""The result of a diagnosis (:class:`Diagnosis`), its JSON and its explanation in words.
+
+:meth:`Diagnosis.as_dict` is docs/interface.md's ``diagnosis.json`` (with more keys);
+:meth:`Diagnosis.improved_model` the ``improved_model.json`` the caliper-model node loads.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+from brake_hil.diagnosis.calibration import Calibration
+from brake_hil.diagnosis.candidates import candidate
+from brake_hil.diagnosis.dataset import Dataset
+from brake_hil.diagnosis.evidence import Evidence
+from brake_hil.diagnosis.fitting import Fit, Model
+from brake_hil.diagnosis.improved_model import ImprovedModel
+from brake_hil.diagnosis.physics_checks import CheckOutcome, unidentified
+from brake_hil.diagnosis.residual_forms import ResidualDescription
+from brake_hil.diagnosis.summary import Summary
+from brake_hil.diagnosis.thresholds import NOISE_EXCESS
+from brake_hil.diagnosis.verdict import Verdict, fit_gain, fit_score
+
+__all__ = ["Diagnosis", "explain"]
+
+Metrics = dict[str, dict[str, float]]
+"""The seed's Table 4-5 metrics by output channel (``ptp_ratio_pct``, ``tau_over_T_pct``,
+``nrmse``)."""
+
+
+@dataclass(frozen=True)
+class Diagnosis:
+    """The result of :func:`diagnose` (what ``diagnosis.json`` holds, plus the fits)."""
+
+    recording: str
+    effects: tuple[str, ...]
+    confidence: float
+    explanation: str
+    evidence: Evidence
+    calibration: Calibration
+    baseline: Fit
+    improved: Fit
+    hypotheses: list[Fit]
+    baseline_metrics: dict[str, dict[str, float]]
+    improved_metrics: dict[str, dict[str, float]]
+    dataset: Dataset
+    summary: Summary
+    model: Model  # the improved model as fitted and scored (the baseline's when none named)
+    unfitted: tuple[str, ...] = ()  # hypotheses left out: not finite where their fit starts
+    checks: dict[str, list[CheckOutcome]] = field(default_factory=dict)  # physics checks run
+    residual: ResidualDescription | None = None  # what an unexplained misfit looks like
+
+    def improved_model(self, rig_path: Path) -> ImprovedModel:
+        """The improved model in the form the caliper-model node loads."""
+        model = self.model
+        parameters = self.improved.parameters()
+        prefix = "calibration."
+        return ImprovedModel(
+            rig_path=rig_path.resolve(),
+            multipliers={
+                k[len(prefix) :]: v for k, v in parameters.items() if k.startswith(prefix)
+            },
+            effects=self.improved.effects,
+            parameters={k: v for k, v in parameters.items() if not k.startswith(prefix)},
+            flow_amplitude=model.context.flow_amplitude,
+            time_reference=model.context.time_reference,
+            pressure_ceiling=model.pressure_ceiling,
+        )
+
+    def as_dict(self) -> dict[str, object]:
+        """JSON of docs/interface.md's ``diagnosis.json`` (with more keys)."""
+        ranked = sorted(self.hypotheses, key=lambda h: fit_score(self.baseline, h), reverse=True)
+        return {
+            "recording": self.recording,
+            "verdict": {
+                "effects": list(self.effects),
+                "confidence": round(self.confidence, 3),
+                "explanation": self.explanation,
+                **self._unexplained_form(),
+                **self._doubt(),
+            },
+            **({"residual": self.residual.as_dict()} if self.residual is not None else {}),
+            "mismatch": {
+                "channels": self.evidence.channels,
+                "windows": [list(w) for w in self.evidence.windows],
+                "evidence": self.evidence.findings,
+                "values": self.evidence.values,
+            },
+            "hypotheses": [
+                {
+                    "effect": "+".join(h.effects),
+                    "score": round(fit_score(self.baseline, h), 4),
+                    "held_out_improvement": round(fit_gain(self.baseline, h), 3),
+                    "held_out_nrmse": h.held_out_nrmse,
+                    "parameters": h.parameters(),
+                    "units": dict(zip(h.parameter_names, h.parameter_units)),
+                    "signature_seen": all(
+                        candidate(e).consistent(self.evidence.values) for e in h.effects
+                    ),
+                    "description": " ".join(candidate(e).describe() for e in h.effects),
+                }
+                for h in ranked
+            ],
+            "calibration": {
+                "multipliers": self.calibration.multipliers,
+                "prior_sigma": self.calibration.sigmas,
+                "posterior_sigma": self.calibration.uncertainty,
+                "prior_z": self.calibration.prior_z(),
+                "not_identified": list(unidentified(self.calibration)),
+            },
+            "baseline": {"metrics": self.baseline_metrics},
+            "improved": {
+                "effects": list(self.improved.effects),
+                "parameters": self.improved.parameters(),
+                "metrics": self.improved_metrics,
+            },
+            "unfitted_hypotheses": list(self.unfitted),
+            "physics_checks": {
+                effects: [asdict(outcome) for outcome in outcomes]
+                for effects, outcomes in self.checks.items()
+            },
+            "decision_inputs": self.summary.as_dict(),
+            "split": {
+                "train": [[w.start, w.end] for w in self.dataset.train],
+                "held_out": [[w.start, w.end] for w in self.dataset.held_out],
+            },
+        }
+
+    def _doubt(self) -> dict[str, object]:
+        """The verdict's doubt, for a single that may not be alone (:meth:`Summary.doubt`).
+
+        ``not_sure_alone``: why, in words; ``possible_second_effect``: the other effect of
+        the pair that betters it (:meth:`Summary.hidden_partner`), when that is why.
+        """
+        doubt = self.summary.doubt(self.effects)
+        if doubt is None:
+            return {}
+        name = self.effects[0]
+        partner = None if name in self.summary.not_alone else self.summary.hidden_partner(name)
+        second = {"possible_second_effect": partner[0]} if partner is not None else {}
+        return {"not_sure_alone": doubt, **second}
+
+    def _unexplained_form(self) -> dict[str, object]:
+        """``verdict.unexplained_form``: unexplained, and a form stands out (docs/interface.md)."""
+        if self.residual is None or self.effects != ("unexplained",):
+            return {}
+        entry = self.residual.verdict_entry()
+        return {} if entry is None else {"unexplained_form": entry}
+
+
+def explain(
+    summary: Summary,
+    verdict: Verdict,
+    fits: tuple[Fit, Fit | None, Fit],
+    evidence: Evidence,
+    metrics: tuple[Metrics, Metrics],
+    residual: ResidualDescription,
+) -> str:
+    """The verdict in words, with its doubts, set-aside hypotheses and unexplained form.
+
+    Args:
+        summary: the decision's inputs.
+        verdict: the decision.
+        fits: the baseline, the hypothesis named (None when none is), the best single.
+        evidence: where the mismatch was located.
+        metrics: the baseline's and the improved model's held-out metrics.
+        residual: the description of the baseline's misfit.
+    """
+    baseline, chosen, best = fits
+    baseline_metrics, improved_metrics = metrics
+    if chosen is None:
+        explanation = _nothing_named(summary, verdict, baseline, best, baseline_metrics)
+    else:
+        explanation = _explain(baseline, chosen, evidence, baseline_metrics, improved_metrics)
+        if summary.excess_ratio < NOISE_EXCESS:
+            explanation += (
+                f" A weak effect: the baseline misses by only {summary.excess_ratio:.1f} times "
+                f"the measurement noise's share, but {chosen.effects[0]} alone leaves "
+                f"{chosen.held_out_cost / summary.noise_cost:.1f} times it and no other "
+                "candidate cuts the error half as much."
+            )
+    if summary.stand_ins:
+        first, finding = next(iter(summary.stand_ins.items()))
+        others = [e.replace("+", " + ") for e in list(summary.stand_ins)[1:]]
+        also = f"; also {', '.join(others)} (the report's physics checks)" if others else ""
+        explanation += (
+            f" Set aside by a physics check, {first.replace('+', ' and ')}: {finding}{also}."
+        )
+    doubt = summary.doubt(chosen.effects) if chosen is not None else None
+    if doubt is not None:
+        explanation += f" Not sure it is alone: {doubt}."
+    if verdict.effects == ("unexplained",):
+        explanation += f" {residual.summary[0].upper()}{residual.summary[1:]}."
+    return explanation
+
+
+def _nothing_named(
+    summary: Summary, verdict: Verdict, baseline: Fit, best: Fit, baseline_metrics: Metrics
+) -> str:
+    """The words of a verdict that names no library effect (unexplained or none)."""
+    # Every NRMSE in words is the seed's (Tables 4-5, per cycle), as the report's table.
+    baseline_nrmse = max(m["nrmse"] for m in baseline_metrics.values())
+    if verdict.effects:
+        return (
+            f"The calibrated LTI model misses the held-out data by up to "
+            f"{100 * baseline_nrmse:.2f} % NRMSE, {summary.excess_ratio:.0f} times the "
+            f"measurement noise's share, and no candidate explains it: the best, "
+            f"{best.effects[0]}, cuts the error {fit_gain(baseline, best):.2f} times."
+        )
+    return (
+        f"The calibrated LTI model explains the recording: held-out NRMSE at most "
+        f"{100 * baseline_nrmse:.2f} %, {summary.excess_ratio:.1f} times the "
+        f"measurement noise's share of the error"
+        + (
+            f" (under {NOISE_EXCESS:g}: nothing left to name)."
+            if summary.excess_ratio < NOISE_EXCESS
+            else f"; the best candidate, {best.effects[0]}, cuts the error only "
+            f"{fit_gain(baseline, best):.2f} times."
+        )
+    )
+
+
+def _explain(
+    baseline: Fit,
+    chosen: Fit,
+    evidence: Evidence,
+    baseline_metrics: Metrics,
+    improved_metrics: Metrics,
+) -> str:
+    """The verdict in words; NRMSE the seed's (per cycle), as in the metrics table."""
+    gain = fit_gain(baseline, chosen)
+    worst = max(baseline_metrics, key=lambda k: baseline_metrics[k]["nrmse"])
+    parts = [
+        f"{' and '.join(chosen.effects)}: the held-out mean squared error falls "
+        f"{gain:.1f} times ({worst} NRMSE {100 * baseline_metrics[worst]['nrmse']:.2f} % -> "
+        f"{100 * improved_metrics[worst]['nrmse']:.2f} %)."
+    ]
+    for name in chosen.effects:
+        model = candidate(name)
+        seen = model.consistent(evidence.values)
+        parts.append(
+            f"{model.describe().split('. ')[0].replace('``', '')}. Expected signature: "
+            f"{model.signature}"
+            f" ({'seen in the evidence' if seen else 'not clearly seen in the evidence'})."
+        )
+    return " ".join(parts)

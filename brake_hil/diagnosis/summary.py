@@ -1,0 +1,223 @@
+"""The numbers a verdict is decided from (:class:`Summary`), taken from the fits.
+
+A :class:`Summary` holds no fits, only their held-out costs and a few flags, and is JSON-able
+(``diagnosis.json``: ``decision_inputs``), so a decision (:func:`.verdict.decide`) is a pure
+function of stored inputs and can be replayed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+from brake_hil.diagnosis.candidates import candidate, own_columns
+from brake_hil.diagnosis.evidence import Evidence
+from brake_hil.diagnosis.fitting import Fit
+from brake_hil.diagnosis.thresholds import HIDDEN_PARTNER_RATIO, NOISE_EXCESS, PAIR_SHARE
+
+__all__ = ["Hypothesis", "Summary", "not_alone", "plausible", "ratio", "summarise"]
+
+
+@dataclass(frozen=True)
+class Hypothesis:
+    """What the decision needs of one fitted candidate set (numbers only)."""
+
+    effects: tuple[str, ...]
+    parameters: int  # the effects' own fitted parameters
+    held_out_cost: float  # mean over channels of the squared held-out NRMSE
+    window_costs: tuple[float, ...]  # the same per held-out window
+    plausible: bool  # fitted parameters describe the physics (Candidate.plausible)
+    consistent: bool  # the evidence shows its signature (Candidate.consistent)
+    channel_nrmse: dict[str, float] = field(default_factory=dict)  # held-out, per channel
+
+
+@dataclass(frozen=True)
+class Summary:
+    """The numbers a verdict is decided from; JSON-able, so a decision can be replayed."""
+
+    baseline_cost: float
+    baseline_window_costs: tuple[float, ...]
+    baseline_nrmse: float  # worst channel's held-out NRMSE
+    noise_cost: float  # the measurement noise's share of any held-out cost
+    singles: tuple[Hypothesis, ...]
+    pairs: tuple[Hypothesis, ...]
+    baseline_channel_nrmse: dict[str, float] = field(default_factory=dict)  # held-out
+    pairs_ruled_out: tuple[tuple[str, ...], ...] = ()  # can never be named (unnameable_pairs)
+    stand_ins: dict[str, str] = field(default_factory=dict)  # "a+b": the physics check failed
+    not_alone: dict[str, str] = field(default_factory=dict)  # single: Candidate.not_alone
+    form_gain: float = 1.0  # the best generic form's held-out improvement (residual_forms)
+    form_gains: dict[str, float] = field(default_factory=dict)  # "form channel": improvement
+
+    def form_bar(self, effects: tuple[str, ...]) -> float:
+        """The best generic form's improvement that counts against ``effects``.
+
+        Forms that are one of the effects' own physics in a free shape
+        (``Candidate.kin_forms``) do not count; without per-form gains, the best form's.
+        """
+        if not self.form_gains:
+            return self.form_gain
+        kin = {f"{form} {channel}" for e in effects for form, channel in candidate(e).kin_forms}
+        return max((g for key, g in self.form_gains.items() if key not in kin), default=1.0)
+
+    def doubt(self, effects: tuple[str, ...]) -> str | None:
+        """Why ``effects``, a single, may not be alone; else None.
+
+        Its own fitted values show another physics beside it (:attr:`not_alone`), or a
+        pair with it cuts what it leaves ``HIDDEN_PARTNER_RATIO`` times while it leaves
+        more than ``NOISE_EXCESS`` times the noise's share (:meth:`hidden_partner`).
+        """
+        if len(effects) != 1:
+            return None
+        if effects[0] in self.not_alone:
+            return self.not_alone[effects[0]]
+        partner = self.hidden_partner(effects[0])
+        if partner is None:
+            return None
+        other, cut = partner
+        return (
+            f"with {other} beside it the fit leaves {cut:.2f} times less of the error than "
+            f"{effects[0]} alone: a second effect too small a share of the baseline's error "
+            f"to be named ({100 * PAIR_SHARE:g} % is asked), or a part of {effects[0]}'s "
+            "physics its model does not follow"
+        )
+
+    def leaves_beyond_noise(self, name: str) -> bool:
+        """Single ``name`` leaves more than ``NOISE_EXCESS`` times the noise's share."""
+        single = next((h for h in self.singles if h.effects == (name,)), None)
+        return single is not None and single.held_out_cost > NOISE_EXCESS * self.floor_cost
+
+    def hidden_partner(self, name: str) -> tuple[str, float] | None:
+        """The second effect of the best pair with single ``name``, and its cut; or None.
+
+        The cut is how many times the pair cuts the error ``name`` leaves; None unless it is
+        ``HIDDEN_PARTNER_RATIO`` or more. Only for a single that leaves more than
+        ``NOISE_EXCESS`` times the noise's share: under that, no second effect is there to
+        find.
+        """
+        single = next((h for h in self.singles if h.effects == (name,)), None)
+        if single is None or not self.leaves_beyond_noise(name):
+            return None
+        pairs = [
+            p
+            for p in self.pairs
+            if name in p.effects and p.plausible and "+".join(p.effects) not in self.stand_ins
+        ]
+        best = min(pairs, key=lambda p: p.held_out_cost, default=None)
+        if best is None:
+            return None
+        cut = ratio(single.held_out_cost, best.held_out_cost)
+        other = next(e for e in best.effects if e != name)
+        return (other, cut) if cut >= HIDDEN_PARTNER_RATIO else None
+
+    @property
+    def floor_cost(self) -> float:
+        """The noise's share of the held-out cost, at most what any fitted model left.
+
+        The cycle-to-cycle estimate (:meth:`Dataset.noise_cost`) counts what changes in one
+        cycle as noise, so a slow change (a leak, a shifting zero) inflates it; but no model
+        fitted on the training windows can predict the held-out noise, so every held-out cost
+        reached (a candidate's, a generic form's) bounds it from above.
+        """
+        reached = [h.held_out_cost for h in (*self.singles, *self.pairs)]
+        reached.append(self.baseline_cost / max(self.form_gain, 1.0))
+        return min(self.noise_cost, *reached)
+
+    @property
+    def excess_ratio(self) -> float:
+        """Baseline held-out cost over the noise's share of it (:attr:`floor_cost`)."""
+        return self.baseline_cost / max(self.floor_cost, 1e-18)
+
+    def as_dict(self) -> dict[str, object]:
+        """Plain JSON."""
+        return asdict(self)
+
+    @staticmethod
+    def from_dict(document: dict[str, Any]) -> Summary:
+        """Inverse of :meth:`as_dict`."""
+
+        def hypotheses(items: list[dict[str, Any]]) -> tuple[Hypothesis, ...]:
+            return tuple(
+                Hypothesis(
+                    **{
+                        **item,
+                        "effects": tuple(item["effects"]),
+                        "window_costs": tuple(item["window_costs"]),
+                    }
+                )
+                for item in items
+            )
+
+        return Summary(
+            baseline_cost=float(document["baseline_cost"]),
+            baseline_window_costs=tuple(document["baseline_window_costs"]),
+            baseline_nrmse=float(document["baseline_nrmse"]),
+            noise_cost=float(document["noise_cost"]),
+            singles=hypotheses(document["singles"]),
+            pairs=hypotheses(document["pairs"]),
+            baseline_channel_nrmse=dict(document.get("baseline_channel_nrmse", {})),
+            pairs_ruled_out=tuple(tuple(p) for p in document.get("pairs_ruled_out", ())),
+            stand_ins=dict(document.get("stand_ins", {})),
+            not_alone=dict(document.get("not_alone", {})),
+            form_gain=float(document.get("form_gain", 1.0)),
+            form_gains={str(k): float(v) for k, v in document.get("form_gains", {}).items()},
+        )
+
+
+def summarise(
+    baseline: Fit,
+    singles: list[Fit],
+    pairs: list[Fit],
+    noise_cost: float,
+    evidence: Evidence,
+    pairs_ruled_out: frozenset[tuple[str, ...]] = frozenset(),
+    form_gains: dict[str, float] | None = None,
+) -> Summary:
+    """The decision's inputs from the fits.
+
+    Also the pairs left unfitted as unnameable, and the best generic form's held-out
+    improvement (:mod:`.residual_forms`).
+    """
+
+    def hypothesis(h: Fit) -> Hypothesis:
+        return Hypothesis(
+            effects=h.effects,
+            parameters=len(h.theta) - len(baseline.theta),
+            held_out_cost=h.held_out_cost,
+            window_costs=h.window_costs,
+            plausible=plausible(h),
+            consistent=all(candidate(e).consistent(evidence.values) for e in h.effects),
+            channel_nrmse=dict(h.held_out_nrmse),
+        )
+
+    return Summary(
+        baseline_cost=baseline.held_out_cost,
+        baseline_window_costs=baseline.window_costs,
+        baseline_nrmse=max(baseline.held_out_nrmse.values()),
+        noise_cost=noise_cost,
+        singles=tuple(hypothesis(h) for h in singles),
+        pairs=tuple(hypothesis(h) for h in pairs),
+        baseline_channel_nrmse=dict(baseline.held_out_nrmse),
+        pairs_ruled_out=tuple(sorted(pairs_ruled_out)),
+        not_alone={h.effects[0]: why for h in singles if (why := not_alone(h)) is not None},
+        form_gain=max((form_gains or {}).values(), default=1.0),
+        form_gains=dict(form_gains or {}),
+    )
+
+
+def ratio(reference: float, cost: float) -> float:
+    """How many times ``cost`` is below ``reference`` (held-out improvement)."""
+    return reference / max(cost, 1e-18)
+
+
+def plausible(fit: Fit) -> bool:
+    """Every effect's fitted parameters describe that physics (see Candidate.plausible)."""
+    members = [candidate(name) for name in fit.effects]
+    return all(member.plausible(own) for member, own in own_columns(members, fit.theta))
+
+
+def not_alone(fit: Fit) -> str | None:
+    """Why a single's fitted values say it is likely not alone (Candidate.not_alone)."""
+    if len(fit.effects) != 1:
+        return None
+    member, own = next(own_columns([candidate(fit.effects[0])], fit.theta))
+    return member.not_alone(own)

@@ -1,0 +1,117 @@
+"""The tuned thresholds of the diagnosis's verdict (:mod:`.verdict`), in one place.
+
+Every threshold is a ratio of held-out mean squared errors (``Fit.held_out_cost``), a share
+of the baseline's held-out error, or a decision margin in log units. What each guards and the
+evidence behind its value: docs/diagnosis.md.
+"""
+
+from __future__ import annotations
+
+ACCEPT_RATIO = 2.0
+"""A hypothesis must cut the baseline's held-out mean squared error this many times.
+
+Half the misfit or more explained by a physics is more than a stand-in fitting the residue
+of a parameter error does. Evidence: docs/diagnosis.md.
+"""
+CLEAR_EXCESS = 10.0
+"""Baseline held-out error over the noise's share above which ``CLEAR_ACCEPT_RATIO`` applies.
+
+A misfit this far above the noise is clearly missing physics, so a smaller cut names it.
+Evidence: docs/diagnosis.md.
+"""
+CLEAR_ACCEPT_RATIO = 1.5
+"""The cut asked of a hypothesis when the misfit is clearly more than noise (``CLEAR_EXCESS``).
+
+Evidence: docs/diagnosis.md.
+"""
+NOISE_EXCESS = 8.0
+"""Baseline held-out error over the noise's share under which no effect is named.
+
+Within a few noise variances what is left is the residue of a parameter error, which a
+candidate can halve; only a weak single that explains it all is named (``WEAK_SINGLE_RATIO``).
+Evidence: docs/diagnosis.md.
+"""
+WEAK_SINGLE_RATIO = 3.0
+"""Under ``NOISE_EXCESS``, the cut a single effect must reach alone to be named.
+
+A parameter error's residue is cut about twice at most by any candidate; a weak real effect's
+own candidate cuts it more. Evidence: docs/diagnosis.md.
+"""
+WEAK_SINGLE_LEFT = 2.5
+"""Under ``NOISE_EXCESS``, the most a named weak single may leave, in noise shares.
+
+It must explain all but the noise. Evidence: docs/diagnosis.md.
+"""
+PAIR_RATIO = 1.8
+"""A second effect must cut the error of the better of its singles again this many times.
+
+A second physics must earn its place against the first alone. Evidence: docs/diagnosis.md.
+"""
+PAIR_SHARE = 0.03
+"""... and explain at least this share of the baseline's held-out error more than that single.
+
+Evidence: docs/diagnosis.md.
+"""
+WINDOW_FLOOR = 0.5
+"""No held-out window may get worse than this times the baseline's error (0: no test).
+
+Missing physics is missing in every window; a stand-in for a parameter error helps one
+segment and hurts another. Evidence: docs/diagnosis.md.
+"""
+PARAMETER_PENALTY = 0.05
+"""Log-gain charged per fitted parameter when ranking hypotheses.
+
+Of two hypotheses that explain the misfit equally, the simpler is kept.
+Evidence: docs/diagnosis.md.
+"""
+UNEXPLAINED_NRMSE = 0.005
+"""Held-out baseline NRMSE above which a misfit no candidate explains is 'unexplained'.
+
+A calibrated baseline with a parameter error only misses by about 0.1 % (noise and the
+virtual rig's richer line); this is five times that. Evidence: docs/diagnosis.md.
+"""
+STRUCTURED_RATIO = 2.0
+"""Cut by a generic form above which a small misfit is still 'unexplained'.
+
+Half of it or more is then a structure no library effect explains, not noise and not a
+parameter error (the calibration absorbs those). Evidence: docs/diagnosis.md.
+"""
+FORM_RATIO = 1.4
+"""A library effect must cut the held-out error this many times more than a generic form.
+
+The forms fit the baseline's residual freely; a real effect, with the calibration refitted
+and its physics exact, beats them; one that does no better is not identified by its physics.
+Evidence: docs/diagnosis.md.
+"""
+STAND_IN_MARGIN = 0.0
+"""Decision margin (log units) a verdict keeps at most when its standing is in doubt.
+
+When a better-scoring hypothesis failed a physics check, or the single named may not be alone
+(``Candidate.not_alone``, ``HIDDEN_PARTNER_RATIO``): confidence at most about 0.71.
+Evidence: docs/diagnosis.md.
+"""
+HIDDEN_PARTNER_RATIO = 1.4
+"""Cut of a single's leftover by a pair with it above which the single is not sure to be alone.
+
+A subtle second effect under a strong one, or a part of the single's physics its model does
+not follow; asked only while the single leaves more than ``NOISE_EXCESS`` noise shares.
+Evidence: docs/diagnosis.md.
+"""
+CHECK_ROUNDS = 3
+"""Verdicts checked at most: a verdict that fails a physics check is set aside, the next checked.
+"""
+PAIR_SHORTLIST = 8
+"""Singles paired with the best single (the next best plausible ones, by score)."""
+PAIR_FIT_RATIO = 1.3
+"""Pairs are fitted when the best single cuts the held-out error at least this much."""
+CONFIDENCE_SLOPE = 0.85
+"""Slope of the logistic map from the decision margin (log units) to the confidence.
+
+A logistic regression of right/wrong verdicts on their margin over the virtual rig's two
+families (``benchmarks/bench_confidence.py``). Evidence: docs/diagnosis.md.
+"""
+CONFIDENCE_OFFSET = 0.9
+"""Offset of that logistic map: the confidence at margin 0 is about 0.71.
+
+Evidence: docs/diagnosis.md.
+"""
