@@ -48,6 +48,7 @@ __all__ = [
     "HOOKS",
     "STATEFUL_HOOKS",
     "LineFlow",
+    "LinePorts",
     "LtiPlant",
     "Signal",
     "State",
@@ -88,6 +89,32 @@ class State(NamedTuple):
 
     name: str
     scale: float
+
+
+@dataclass(frozen=True)
+class LinePorts:
+    """What the host hands the line port at one instant (SI): the line's ends and makings."""
+
+    master_pressure: Signal  # p_i, Pa
+    bore_pressure: Signal  # p_b, Pa
+    flow: Signal  # Q_h, m^3/s: the host's state through pipe and valve (the whole inertance)
+    upstream_drop: Signal  # pressure drop over hard pipe and valve, Pa
+    hose_resistance: Signal  # R_t at the present viscosity, Pa s/m^3
+    inertance: float  # I_r + I_t, Pa s^2/m^3
+    fluid_compliance: Signal  # per unit volume: fluid and the rig's own air (eq. 18), 1/Pa
+    extra_compliance: Callable[[Signal], Signal] | None  # the laws' extra, per unit volume
+
+    def compliance_at(self, pressure: Signal) -> Signal:
+        """Compliance per unit volume (1/Pa) at ``pressure`` (Pa): the fluid's plus the laws'."""
+        if self.extra_compliance is None:
+            return self.fluid_compliance
+        return self.fluid_compliance + self.extra_compliance(pressure)
+
+    def lumped_rate(self, hose_drop: Signal) -> Signal:
+        """``dQ_h/dt`` (m^3/s^2) of eq. 21c: ``(p_i - p_b - dp_upstream - dp_hose) / I``."""
+        return (
+            self.master_pressure - self.bore_pressure - self.upstream_drop - hose_drop
+        ) / self.inertance
 
 
 LineFlow: TypeAlias = tuple[Signal, list[Signal], Signal, Signal]
@@ -148,44 +175,21 @@ class TruthLaw:
         del viscosity_factor
         return linear_resistance * linear_factor * flow
 
-    def line_flow(
-        self,
-        master_pressure: Signal,
-        bore_pressure: Signal,
-        flow: Signal,
-        upstream_drop: Signal,
-        hose_resistance: Signal,
-        inertance: float,
-        fluid_compliance: Signal,
-        extra_compliance: Callable[[Signal], Signal] | None,
-        states: Sequence[Signal],
-    ) -> LineFlow:
+    def line_flow(self, line: LinePorts, states: Sequence[Signal]) -> LineFlow:
         """The line from the valve outlet to the bore, with the law's own states.
 
         The default is the host's own line, lumped (eq. 21c):
         ``I Q_h' = p_i - p_b - dp_upstream - R_t Q_h``, all of ``Q_h`` entering the bore.
 
         Args:
-            master_pressure: ``p_i`` (Pa).
-            bore_pressure: ``p_b`` (Pa).
-            flow: ``Q_h`` (m^3/s), the host's state through hard pipe and valve, carrying the
-                line's whole inertance.
-            upstream_drop: pressure drop over hard pipe and valve (Pa).
-            hose_resistance: ``R_t`` at the present viscosity (Pa s/m^3).
-            inertance: ``I_r + I_t`` (Pa s^2/m^3).
-            fluid_compliance: per unit volume, the fluid and the rig's own air (eq. 18 without
-                the walls, 1/Pa).
-            extra_compliance: the laws' extra compliance per unit volume (1/Pa) at a gauge
-                pressure (Pa), or None.
+            line: the line's ends, flow and makings at this instant (:class:`LinePorts`).
             states: the law's own states (SI).
 
         Returns:
             ``(dQ_h/dt, own states' rates, flow into the bore, compliance added to the bore)``.
         """
-        del fluid_compliance, extra_compliance, states
-        hose_drop = hose_resistance * flow
-        rate = (master_pressure - bore_pressure - upstream_drop - hose_drop) / inertance
-        return rate, [], flow, 0.0
+        del states
+        return line.lumped_rate(line.hose_resistance * line.flow), [], line.flow, 0.0
 
     def seal_asymmetry(self) -> float:
         """Apply/release asymmetry ``a`` (-) of the seal.

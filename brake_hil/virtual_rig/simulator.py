@@ -51,7 +51,7 @@ from brake_hil.physics.rig import Rig
 from brake_hil.types import FloatArray
 from brake_hil.virtual_rig.effects.base import Effect
 from brake_hil.virtual_rig.excitation import Excitation, seed_pulsing
-from brake_hil.virtual_rig.laws import Signal, State, TruthLaw, hooked
+from brake_hil.virtual_rig.laws import LinePorts, Signal, State, TruthLaw, hooked
 from brake_hil.virtual_rig.plant import Plant, build_plant
 
 SOLVER_METHOD = "BDF"
@@ -378,7 +378,7 @@ class _Dynamics:
             into_bore = flow
         else:
             own = self.line_states
-            derivative[self.i_q0], derivative[own], into_bore, bore_extra = ports.line.line_flow(
+            line = LinePorts(
                 p_i,
                 p_b,
                 flow,
@@ -387,7 +387,9 @@ class _Dynamics:
                 self.line_inertance,
                 fluid,
                 extra,
-                x[own],
+            )
+            derivative[self.i_q0], derivative[own], into_bore, bore_extra = ports.line.line_flow(
+                line, x[own]
             )
 
         # master-cylinder chamber (21b)

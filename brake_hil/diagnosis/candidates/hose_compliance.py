@@ -14,6 +14,7 @@ from brake_hil.diagnosis.candidates.base import (
     Rival,
 )
 from brake_hil.diagnosis.candidates.late_input import LateInput
+from brake_hil.diagnosis.candidates.registry import register_candidate_class
 from brake_hil.diagnosis.engine import Coupling, Entry, Term
 from brake_hil.physics.catalogue import CATALOGUE
 from brake_hil.types import FloatArray
@@ -38,6 +39,7 @@ class HoseNode(Term):
         coupling.hose_creep_time = float(self.creep_time[row])
 
 
+@register_candidate_class
 class HoseCompliance(Candidate):
     """Hose compliance: the line stores fluid as its walls swell.
 

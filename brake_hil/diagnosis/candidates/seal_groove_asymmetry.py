@@ -12,6 +12,7 @@ from brake_hil.diagnosis.candidates.base import (
     Context,
     Draft,
 )
+from brake_hil.diagnosis.candidates.registry import register_candidate_class
 from brake_hil.diagnosis.engine import RELATIVE_FORCE, Coupling, Entry, State, Step, Term
 from brake_hil.physics.catalogue import CATALOGUE
 from brake_hil.types import FloatArray, IndexArray
@@ -68,6 +69,7 @@ class _Relaxation(Step):
         self.side = np.where(seal >= self.relaxed, APPLY, RELEASE)
 
 
+@register_candidate_class
 class SealGrooveAsymmetry(Candidate):
     """Seal groove asymmetry: the seal pushes back harder on release than it yields on apply.
 

@@ -11,6 +11,7 @@ from brake_hil.diagnosis.candidates.base import (
     Draft,
     Rival,
 )
+from brake_hil.diagnosis.candidates.registry import register_candidate_class
 from brake_hil.diagnosis.candidates.resonant_reading import ResonantReading
 from brake_hil.diagnosis.engine import ChannelDelay
 from brake_hil.physics.catalogue import CATALOGUE
@@ -40,6 +41,7 @@ def _skews(theta: FloatArray) -> FloatArray:
     return np.asarray(delays - np.median(delays), dtype=float)
 
 
+@register_candidate_class
 class SensorDelay(Candidate):
     """Sensor delay: each channel is acquired late by its own delay.
 

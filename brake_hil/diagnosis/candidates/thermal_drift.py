@@ -13,6 +13,7 @@ from brake_hil.diagnosis.candidates.base import (
     Context,
     Draft,
 )
+from brake_hil.diagnosis.candidates.registry import register_candidate_class
 from brake_hil.diagnosis.engine import Coupling, Entry, Term
 from brake_hil.physics.catalogue import CATALOGUE
 from brake_hil.types import FloatArray
@@ -59,6 +60,7 @@ def heated_time(time: float, reference: float, heating_time: float) -> float:
     )
 
 
+@register_candidate_class
 class ThermalDrift(Candidate):
     """Thermal drift: viscosity and seal modulus change as the rig warms up.
 

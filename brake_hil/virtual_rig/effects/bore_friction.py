@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from brake_hil.physics import catalogue
 from brake_hil.virtual_rig.effects import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
+from brake_hil.virtual_rig.effects.registry import register_effect
 from brake_hil.virtual_rig.effects.seal_stick_slip import smooth_speed
 from brake_hil.virtual_rig.laws import LtiPlant, Signal, State, TruthLaw
 
@@ -94,6 +95,7 @@ class DahlBoreFriction(TruthLaw):
         return force, [self.state_rate(w, velocity)]
 
 
+@register_effect
 @dataclass(frozen=True)
 class BoreFriction(Effect):
     """Piston-bore friction from caliper cocking.

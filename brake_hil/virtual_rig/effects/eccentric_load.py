@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from brake_hil.physics import catalogue
 from brake_hil.virtual_rig.effects import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
+from brake_hil.virtual_rig.effects.registry import register_effect
 from brake_hil.virtual_rig.laws import LtiPlant, Signal, TruthLaw
 
 
@@ -34,6 +35,7 @@ class LoadDependentShare(TruthLaw):
         return share
 
 
+@register_effect
 @dataclass(frozen=True)
 class EccentricLoad(Effect):
     """Eccentric loading of the cut caliper.

@@ -10,6 +10,7 @@ import numpy as np
 from brake_hil.physics import catalogue
 from brake_hil.virtual_rig.effects import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
+from brake_hil.virtual_rig.effects.registry import register_effect
 from brake_hil.virtual_rig.laws import LtiPlant, Signal, TruthLaw
 
 _QUADRATURE_POINTS = 512
@@ -71,6 +72,7 @@ def describing_function_resistance(valve: OrificeValve, amplitude: float) -> flo
     return float(2.0 / amplitude * np.mean(drop * np.sin(theta)))
 
 
+@register_effect
 @dataclass(frozen=True)
 class OrificeFlow(Effect):
     """Turbulent orifice flow in the needle valve.

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from brake_hil.physics import catalogue
 from brake_hil.virtual_rig.effects import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
+from brake_hil.virtual_rig.effects.registry import register_effect
 from brake_hil.virtual_rig.laws import LtiPlant, Signal, State, TruthLaw
 
 SWITCH_WIDTH = 1.0e-6
@@ -58,6 +59,7 @@ class GrooveAsymmetry(TruthLaw):
         return effective, [deflection / self.relaxation_time]
 
 
+@register_effect
 @dataclass(frozen=True)
 class SealGrooveAsymmetry(Effect):
     """Seal-groove asymmetry: the seal's stiffness and slip threshold differ on apply and release.

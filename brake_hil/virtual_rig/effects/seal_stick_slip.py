@@ -12,6 +12,7 @@ from brake_hil.physics import catalogue
 from brake_hil.physics.parameters import seal_properties
 from brake_hil.virtual_rig.effects import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
+from brake_hil.virtual_rig.effects.registry import register_effect
 from brake_hil.virtual_rig.laws import LtiPlant, Signal, State, TruthLaw
 
 SPEED_SMOOTHING = 2.0e-5
@@ -116,6 +117,7 @@ class LuGreSeal(TruthLaw):
         return self.caliper_damping, self.block_damping
 
 
+@register_effect
 @dataclass(frozen=True)
 class SealStickSlip(Effect):
     """Seal stick-slip: Coulomb friction at the piston-seal interface.

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from brake_hil.physics import catalogue
 from brake_hil.virtual_rig.effects import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
+from brake_hil.virtual_rig.effects.registry import register_effect
 from brake_hil.virtual_rig.laws import LtiPlant, Signal, TruthLaw
 
 _LOWEST_MODULUS_FACTOR = 0.2
@@ -67,6 +68,7 @@ class HeatingLaw(TruthLaw):
         return {"temperature": self.temperature(time)}
 
 
+@register_effect
 @dataclass(frozen=True)
 class ThermalDrift(Effect):
     """Thermal drift: repeated pulsing warms the fluid and the seals during a recording.

@@ -5,8 +5,10 @@ Family a (:mod:`brake_hil.virtual_rig.effects`) has one truth law per effect of 
 Bouc-Wen seal instead of LuGre, a Churchill-Usagi valve instead of an orifice with ``C_d(Re)``,
 a creeping hose node instead of an RC ladder ...) and acquires its cases through its own
 measurement chain (:mod:`~brake_hil.virtual_rig.family_b.daq`), so a diagnosis tuned on one
-family's recordings can be judged on the other's. ``EFFECTS_B`` maps each library name to its
-family-b law, in the catalogue's order; its labels name the same effects as family a's.
+family's recordings can be judged on the other's. Each law registers itself where it is
+defined (:func:`register_effect_b`); importing this package imports every module of its folder
+but the out-of-library one. ``EFFECTS_B`` maps each library name to its family-b law, in the
+catalogue's order (a live view); its labels name the same effects as family a's.
 ``OUTSIDE_B`` names the out-of-library effects family b draws for ``unexplained`` cases: those
 of :mod:`brake_hil.virtual_rig.family_b.outside` (``OUTSIDE_NAMES``, registered with
 :func:`brake_hil.virtual_rig.effects.register_effect` when imported) when that module is
@@ -15,63 +17,41 @@ there, else family a's transducer gain; it is looked up on first use.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from functools import cache
 import importlib
+import pkgutil
 
-from brake_hil.physics import catalogue
 from brake_hil.virtual_rig.effects.base import Effect
-from brake_hil.virtual_rig.family_b.base import FAMILY_B, FamilyBEffect
-from brake_hil.virtual_rig.family_b.bore_friction import BoreFrictionB
+from brake_hil.virtual_rig.family_b.base import (
+    EFFECTS_B,
+    FAMILY_B,
+    FamilyBEffect,
+    register_effect_b,
+    unregister_effect_b,
+)
 from brake_hil.virtual_rig.family_b.daq import DAQ_B, MeasurementChainB
-from brake_hil.virtual_rig.family_b.eccentric_load import EccentricLoadB
-from brake_hil.virtual_rig.family_b.entrained_air import EntrainedAirB
-from brake_hil.virtual_rig.family_b.hose_compliance import HoseComplianceB
-from brake_hil.virtual_rig.family_b.orifice_flow import OrificeFlowB
-from brake_hil.virtual_rig.family_b.seal_groove_asymmetry import SealGrooveAsymmetryB
-from brake_hil.virtual_rig.family_b.seal_stick_slip import SealStickSlipB
-from brake_hil.virtual_rig.family_b.sensor_delay import SensorDelayB
-from brake_hil.virtual_rig.family_b.thermal_drift import ThermalDriftB
 
 __all__ = [
     "DAQ_B",
     "EFFECTS_B",
     "FAMILY_B",
     "OUTSIDE_B",
-    "BoreFrictionB",
-    "EccentricLoadB",
-    "EntrainedAirB",
     "FamilyBEffect",
-    "HoseComplianceB",
     "MeasurementChainB",
-    "OrificeFlowB",
-    "SealGrooveAsymmetryB",
-    "SealStickSlipB",
-    "SensorDelayB",
-    "ThermalDriftB",
     "is_family_b_law",
     "outside_names",
+    "register_effect_b",
+    "unregister_effect_b",
 ]
-
-_LAWS: tuple[type[FamilyBEffect], ...] = (
-    SealStickSlipB,
-    SealGrooveAsymmetryB,
-    EntrainedAirB,
-    OrificeFlowB,
-    HoseComplianceB,
-    BoreFrictionB,
-    EccentricLoadB,
-    ThermalDriftB,
-    SensorDelayB,
-)
-
-EFFECTS_B: Mapping[str, type[Effect]] = {
-    name: law for name in catalogue.CATALOGUE for law in _LAWS if law.name == name
-}
-"""Family b's law of every library effect by its name, in the catalogue's order."""
 
 _OUTSIDE_MODULE = "brake_hil.virtual_rig.family_b.outside"
 _OUTSIDE_FALLBACK = ("sensor_nonlinearity",)
+
+for _module in pkgutil.iter_modules(__path__):
+    name = f"{__name__}.{_module.name}"
+    if not _module.name.startswith("_") and name != _OUTSIDE_MODULE:  # that one on first use
+        importlib.import_module(name)  # its truth law registers itself
+del _module, name
 
 OUTSIDE_B: tuple[str, ...]
 """Out-of-library effects family b draws for ``unexplained`` cases (see the module docstring)."""

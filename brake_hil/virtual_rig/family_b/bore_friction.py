@@ -10,7 +10,7 @@ import numpy as np
 from brake_hil.virtual_rig.effects import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
 from brake_hil.virtual_rig.effects.bore_friction import cocking_normal_force
-from brake_hil.virtual_rig.family_b.base import FamilyBEffect
+from brake_hil.virtual_rig.family_b.base import FamilyBEffect, register_effect_b
 from brake_hil.virtual_rig.laws import LtiPlant, Signal, TruthLaw
 
 __all__ = ["BoreFrictionB", "StribeckBoreFriction"]
@@ -58,6 +58,7 @@ class StribeckBoreFriction(TruthLaw):
         return force, []
 
 
+@register_effect_b
 @dataclass(frozen=True)
 class BoreFrictionB(FamilyBEffect, effect="bore_friction"):
     """Piston-bore friction from caliper cocking (family b): a static Stribeck curve.

@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
-from brake_hil.virtual_rig.family_b.base import FamilyBEffect
+from brake_hil.virtual_rig.family_b.base import FamilyBEffect, register_effect_b
 from brake_hil.virtual_rig.laws import LtiPlant, Signal, TruthLaw
 
 __all__ = ["CompressingStackShare", "EccentricLoadB"]
@@ -47,6 +47,7 @@ class CompressingStackShare(TruthLaw):
         return share
 
 
+@register_effect_b
 @dataclass(frozen=True)
 class EccentricLoadB(FamilyBEffect, effect="eccentric_load"):
     """Eccentric loading of the cut caliper (family b): a washer stack compressing to solid.

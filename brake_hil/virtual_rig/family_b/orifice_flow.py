@@ -10,7 +10,7 @@ from scipy.optimize import brentq
 
 from brake_hil.virtual_rig.effects import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
-from brake_hil.virtual_rig.family_b.base import FamilyBEffect
+from brake_hil.virtual_rig.family_b.base import FamilyBEffect, register_effect_b
 from brake_hil.virtual_rig.laws import LtiPlant, Signal, TruthLaw
 
 __all__ = ["BlendedValve", "OrificeFlowB", "describing_function_resistance"]
@@ -70,6 +70,7 @@ def describing_function_resistance(valve: BlendedValve, amplitude: float) -> flo
     return float(2.0 / amplitude * np.mean(drop * np.sin(theta)))
 
 
+@register_effect_b
 @dataclass(frozen=True)
 class OrificeFlowB(FamilyBEffect, effect="orifice_flow"):
     """Turbulent orifice flow (family b): the needle valve's gap blends laminar and turbulent flow.

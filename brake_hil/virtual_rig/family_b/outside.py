@@ -25,7 +25,7 @@ again (a test that must see the built-in ``OUT_OF_LIBRARY`` only).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 import math
 
@@ -43,7 +43,7 @@ from brake_hil.virtual_rig.effects import (
     unregister_effect,
 )
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
-from brake_hil.virtual_rig.laws import LineFlow, LtiPlant, Signal, TruthLaw
+from brake_hil.virtual_rig.laws import LineFlow, LinePorts, LtiPlant, Signal, TruthLaw
 
 __all__ = [
     "OUTSIDE_LAWS",
@@ -114,31 +114,11 @@ class LeakyLine(TruthLaw):
         fluidity = self.nominal_hose_resistance / hose_resistance
         return self.conductance * fluidity * bore_pressure * opening * opening * opening
 
-    def line_flow(
-        self,
-        master_pressure: Signal,
-        bore_pressure: Signal,
-        flow: Signal,
-        upstream_drop: Signal,
-        hose_resistance: Signal,
-        inertance: float,
-        fluid_compliance: Signal,
-        extra_compliance: Callable[[Signal], Signal] | None,
-        states: Sequence[Signal],
-    ) -> LineFlow:
+    def line_flow(self, line: LinePorts, states: Sequence[Signal]) -> LineFlow:
         """Eq. 21c's lumped line; the bore receives ``Q_h - Q_L``."""
-        rate, own, into_bore, added = super().line_flow(
-            master_pressure,
-            bore_pressure,
-            flow,
-            upstream_drop,
-            hose_resistance,
-            inertance,
-            fluid_compliance,
-            extra_compliance,
-            states,
-        )
-        return rate, own, into_bore - self.leak(bore_pressure, hose_resistance), added
+        rate, own, into_bore, added = super().line_flow(line, states)
+        leak = self.leak(line.bore_pressure, line.hose_resistance)
+        return rate, own, into_bore - leak, added
 
 
 @dataclass(frozen=True)

@@ -9,7 +9,7 @@ import numpy as np
 
 from brake_hil.virtual_rig.effects import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
-from brake_hil.virtual_rig.family_b.base import FamilyBEffect
+from brake_hil.virtual_rig.family_b.base import FamilyBEffect, register_effect_b
 from brake_hil.virtual_rig.laws import LtiPlant, Signal, State, TruthLaw
 
 __all__ = ["GradedGroove", "SealGrooveAsymmetryB"]
@@ -62,6 +62,7 @@ class GradedGroove(TruthLaw):
         return effective, [creep]
 
 
+@register_effect_b
 @dataclass(frozen=True)
 class SealGrooveAsymmetryB(FamilyBEffect, effect="seal_groove_asymmetry"):
     """Seal-groove asymmetry (family b): the seal's stiffness graded across its groove clearance.

@@ -12,7 +12,7 @@ from brake_hil.physics.parameters import seal_properties
 from brake_hil.virtual_rig.effects import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
 from brake_hil.virtual_rig.effects.seal_stick_slip import smooth_speed
-from brake_hil.virtual_rig.family_b.base import FamilyBEffect
+from brake_hil.virtual_rig.family_b.base import FamilyBEffect, register_effect_b
 from brake_hil.virtual_rig.laws import LtiPlant, Signal, State, TruthLaw
 
 __all__ = ["BoucWenSeal", "SealStickSlipB"]
@@ -103,6 +103,7 @@ class BoucWenSeal(TruthLaw):
         return self.caliper_damping, self.block_damping
 
 
+@register_effect_b
 @dataclass(frozen=True)
 class SealStickSlipB(FamilyBEffect, effect="seal_stick_slip"):
     """Seal stick-slip (family b): each seal a Bouc-Wen element, elastic then yielding smoothly.

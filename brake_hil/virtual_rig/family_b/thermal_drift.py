@@ -10,7 +10,7 @@ import numpy as np
 
 from brake_hil.virtual_rig.effects import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
-from brake_hil.virtual_rig.family_b.base import FamilyBEffect
+from brake_hil.virtual_rig.family_b.base import FamilyBEffect, register_effect_b
 from brake_hil.virtual_rig.laws import LtiPlant, Signal, TruthLaw
 
 __all__ = ["ThermalDriftB", "TwoNodeHeating", "walther_viscosity"]
@@ -96,6 +96,7 @@ class TwoNodeHeating(TruthLaw):
         }
 
 
+@register_effect_b
 @dataclass(frozen=True)
 class ThermalDriftB(FamilyBEffect, effect="thermal_drift"):
     """Thermal drift (family b): the fluid warms first, the seals after it, through a network.
