@@ -19,9 +19,10 @@ effect                      port              the physics
 
 Each law is marked where it is defined (no list names them; their laws on the host's ports
 are in :mod:`~brake_hil.virtual_rig.family_b._outside_laws`). Importing the module registers
-the five (catalogue entry, then truth law), in that order, with :func:`register_outside`, which is idempotent: a second import, a reload or a worker process
-that imports it again registers nothing twice. :func:`unregister_outside` takes them out
-again (a test that must see the built-in ``OUT_OF_LIBRARY`` only).
+the five (catalogue entry, then truth law), in that order, with :func:`register_outside`,
+which is idempotent: a second import, a reload or a worker process that imports it again
+registers nothing twice. :func:`unregister_outside` takes them out again (a test that must
+see the built-in ``OUT_OF_LIBRARY`` only).
 """
 
 from __future__ import annotations
