@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from brake_hil.physics import catalogue
-from brake_hil.virtual_rig.effects import _math as fm
+from brake_hil.virtual_rig import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
 from brake_hil.virtual_rig.effects.registry import register_effect
 from brake_hil.virtual_rig.laws import LtiPlant, Signal, TruthLaw

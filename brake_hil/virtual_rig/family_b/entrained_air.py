@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from brake_hil.virtual_rig.effects import _math as fm
+from brake_hil.virtual_rig import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
 from brake_hil.virtual_rig.effects.entrained_air import ATMOSPHERIC_PRESSURE
 from brake_hil.virtual_rig.family_b.base import FamilyBEffect, register_effect_b

@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from brake_hil.virtual_rig.effects import _math as fm
+from brake_hil.virtual_rig import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
 from brake_hil.virtual_rig.family_b.base import FamilyBEffect, register_effect_b
 from brake_hil.virtual_rig.laws import LtiPlant, Signal, TruthLaw
