@@ -5,7 +5,8 @@ Family a (:mod:`brake_hil.virtual_rig.effects`) and family b
 but the way a law sits on the host's port is often the same: a valve law takes a share of the
 linearised resistance, a frictional seal law a share of the seal force with its own shear
 deflection, a groove law shifts the seal spring about a relaxed position that moves, a bore
-friction law presses the piston on its bore by the caliper's cocking. Those skeletons are
+friction law presses the piston on its bore by the caliper's cocking, the fluid warms up
+from ambient with a time constant. Those skeletons are
 here; each family's law fills in only its own physics (a hook of a few lines).
 """
 
@@ -27,6 +28,7 @@ __all__ = [
     "RelaxingGroove",
     "SharedValve",
     "asymmetric_limit",
+    "heated_temperature",
     "smooth_speed",
     "structural_damping",
 ]
@@ -51,6 +53,16 @@ def asymmetric_limit(limit: Signal, asymmetry: float, deflection: Signal, width:
     """
     scaled: Signal = limit * (1.0 - asymmetry * fm.tanh(deflection / width))
     return scaled
+
+
+def heated_temperature(time: Signal, ambient: float, rise: float, time_constant: float) -> Signal:
+    """``T_0 + dT (1 - exp(-t / tau))`` (K): a first-order warm-up from ``ambient`` (K).
+
+    ``time`` in s from the start (none before it), the plateau ``rise`` (K) above ambient.
+    """
+    fraction = -fm.expm1(-fm.maximum(time, 0.0) / time_constant)
+    temperature: Signal = ambient + rise * fraction
+    return temperature
 
 
 def structural_damping(params: ModelParameters, ratio: float) -> tuple[float, float]:
