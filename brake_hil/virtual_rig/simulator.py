@@ -80,7 +80,7 @@ class SolverStats(NamedTuple):
 class RigRun:
     """One virtual-rig run at the 1 kHz stamps: true and measured signals (SI).
 
-    The issue-4 rig emulator plays it out in real time from these arrays. ``measured`` holds
+    The rig emulator plays it out in real time from these arrays. ``measured`` holds
     ``p_i``, ``p_b``, ``F_k``, ``x_c`` (and ``p_a`` when air-driven): what the DAQ logs.
     ``internals`` holds signals no sensor sees (seal displacement and force, temperature...).
     """

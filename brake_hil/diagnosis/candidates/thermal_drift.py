@@ -72,10 +72,9 @@ class ThermalDrift(Candidate):
     the few tens of kelvin of a run each coefficient is taken linear in temperature: one
     relative rate at the start for the line resistance and one for the seal's ``k_eh`` and
     ``c_eh``, one heating time ``tau``, zero change in the middle of the training data (where
-    the calibration holds on average). A linear drift in time (before 2026-11-27) left 26-34
-    times the noise on strong drifts of seed 1601 (both families: their heating times are
-    4-20 s); this form 3.5-9.8. The rates at the start reach 0.1 1/s on a fast heating (a
-    viscosity falling by 64 % with a 7 s heating time).
+    the calibration holds on average); a drift linear in time leaves several times more of a
+    strong drift unexplained (evidence in docs/diagnosis.md). The rates at the start reach
+    0.1 1/s on a fast heating (a viscosity falling by 64 % with a 7 s heating time).
     """
 
     entry = CATALOGUE["thermal_drift"]

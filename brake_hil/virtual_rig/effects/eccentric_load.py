@@ -66,9 +66,9 @@ class EccentricLoad(Effect):
         Parameter("seating_force", "N", 100.0, 1.0e5, "F_0 of the seating law"),
     )
     diagnosis_model = (
-        "a caliper force share (A_eb replaced by s A_eb, eq. 22c) quadratic in p_b about 1 MPa "
-        "(since 2026-11-26; linear before); the simulator's share seats with load "
-        "hyperbolically, which the quadratic follows over the recorded pressures only"
+        "a caliper force share (A_eb replaced by s A_eb, eq. 22c) quadratic in p_b about "
+        "1 MPa; the simulator's share seats with load hyperbolically, which the quadratic "
+        "follows over the recorded pressures only"
     )
 
     def law(self, plant: LtiPlant) -> LoadDependentShare:

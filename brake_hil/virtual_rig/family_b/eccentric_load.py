@@ -80,9 +80,9 @@ class EccentricLoadB(FamilyBEffect, effect="eccentric_load"):
         Parameter("knee_share", "-", 0.01, 0.5, "W / F_s, the knee's width"),
     )
     diagnosis_model = (
-        "a caliper force share (A_eb replaced by s A_eb, eq. 22c) quadratic in p_b about 1 MPa "
-        "(since 2026-11-26; linear before); the simulator's share falls linearly with the force "
-        "and stops at the stack's solid force, a knee no polynomial has"
+        "a caliper force share (A_eb replaced by s A_eb, eq. 22c) quadratic in p_b about "
+        "1 MPa; the simulator's share falls linearly with the force and stops at the stack's "
+        "solid force, a knee no polynomial has"
     )
 
     @classmethod

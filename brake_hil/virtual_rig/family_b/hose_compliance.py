@@ -90,8 +90,8 @@ class HoseComplianceB(FamilyBEffect, effect="hose_compliance"):
     )
     diagnosis_model = (
         "one lumped RC stage between the valve and the bore whose wall creeps too "
-        "(Kelvin-Voigt, since 2026-11-26: the same form as this law); the simulator's node "
-        "sits mid-hose and takes the line's fluid and the steel pipe's swell"
+        "(Kelvin-Voigt, the same form as this law); the simulator's node sits mid-hose and "
+        "takes the line's fluid and the steel pipe's swell"
     )
 
     @classmethod
