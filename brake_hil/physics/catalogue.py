@@ -2,24 +2,28 @@
 
 An entry is what every part of brake_hil agrees an effect *is*: its name (interface.md's
 effect table), the physics in words, where that physics is written down, how it shows in a
-recording, which measured channels it reaches, and the physical quantities it is described
-by with their units. Two families point to each entry:
+recording, which measured channels it reaches, the physical quantities it is described by
+with their units, and what the reports say of it (the rig check of the diagnosis report, the
+trend's words and cause, the calibrated values its misfit shows up in). Three things point to
+each entry:
 
-* the virtual rig's *truth law* (:mod:`brake_hil.virtual_rig.effects`), the richer physics
-  that makes test recordings;
+* the virtual rig's *truth laws* (:mod:`brake_hil.virtual_rig.effects` and
+  :mod:`brake_hil.virtual_rig.family_b`, two structurally different ones), the richer
+  physics that makes test recordings;
 * the diagnosis's *candidate* (:mod:`brake_hil.diagnosis.candidates`), the simpler model
   fitted to a recording.
 
-Adding an effect is one entry here (:func:`register` for one made at run time), one truth law
-and one candidate (CONTRIBUTING.md). Physics outside the library (what ``unexplained`` is
-tested on) has entries in :data:`OUT_OF_LIBRARY`: a truth law and no candidate.
+Adding an effect is one entry here (:func:`register` for one made at run time), a truth law
+of each family and one candidate (CONTRIBUTING.md); each registers itself. Physics outside
+the library (what ``unexplained`` is tested on) has entries in :data:`OUT_OF_LIBRARY`: a
+truth law and no candidate.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import Generic, NamedTuple, TypeVar
 
 from brake_hil.errors import EffectError
 
@@ -27,6 +31,7 @@ __all__ = [
     "CATALOGUE",
     "OUT_OF_LIBRARY",
     "EffectEntry",
+    "EntryRegistry",
     "Quantity",
     "effect_names",
     "entry",
@@ -50,7 +55,7 @@ class Quantity(NamedTuple):
 
 @dataclass(frozen=True)
 class EffectEntry:
-    """One effect of the library (or out of it): what both families point to."""
+    """One effect of the library (or out of it): what its truth laws and candidate point to."""
 
     name: str  # interface.md's effect name
     title: str  # one line
@@ -367,6 +372,67 @@ def stand_ins() -> dict[str, tuple[str, ...]]:
         for value in item.stands_in_for:
             found[value] = (*found.get(value, ()), item.name)
     return found
+
+
+_Item = TypeVar("_Item")
+
+
+class _InCatalogueOrder(Mapping[str, _Item]):
+    """A registry's items of one part of the catalogue, in its order (a live view)."""
+
+    def __init__(self, entries: Mapping[str, EffectEntry], items: Mapping[str, _Item]) -> None:
+        self._entries = entries
+        self._items = items
+
+    def __getitem__(self, name: str) -> _Item:
+        if name not in self._entries:
+            raise KeyError(name)
+        return self._items[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return (name for name in self._entries if name in self._items)
+
+    def __len__(self) -> int:
+        return sum(1 for _ in self)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({list(self)})"
+
+
+class EntryRegistry(Generic[_Item]):
+    """What points to the catalogue's entries (a truth law, a candidate), one per effect.
+
+    Read through :meth:`view`, in the catalogue's order whatever the order of registration,
+    so what draws from it (a case schedule, a diagnosis) is the same on every run.
+    """
+
+    def __init__(self, kind: str) -> None:
+        self.kind = kind  # what one item is, in messages: "a truth law", "a candidate"
+        self._items: dict[str, _Item] = {}
+
+    def add(self, name: str, item: _Item) -> None:
+        """Register ``item`` for the effect ``name``.
+
+        Raises:
+            EffectError: that effect has one already.
+        """
+        if name in self._items:
+            held = self._items[name]
+            shown = getattr(held, "__name__", type(held).__name__)
+            raise EffectError(f"effect {name} has {self.kind} already ({shown})")
+        self._items[name] = item
+
+    def remove(self, name: str) -> None:
+        """Take out the item of ``name`` (nothing when there is none)."""
+        self._items.pop(name, None)
+
+    def get(self, name: str) -> _Item | None:
+        """The item of ``name``, or None."""
+        return self._items.get(name)
+
+    def view(self, entries: Mapping[str, EffectEntry] | None = None) -> Mapping[str, _Item]:
+        """The items of ``entries`` (default: the library), in their order, as they are read."""
+        return _InCatalogueOrder(CATALOGUE if entries is None else entries, self._items)
 
 
 def effect_names() -> tuple[str, ...]:

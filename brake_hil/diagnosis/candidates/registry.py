@@ -14,7 +14,7 @@ from typing import TypeVar, overload
 
 from brake_hil.diagnosis.candidates.base import Candidate
 from brake_hil.errors import EffectError
-from brake_hil.physics.catalogue import CATALOGUE
+from brake_hil.physics.catalogue import CATALOGUE, EntryRegistry
 
 __all__ = [
     "CANDIDATES",
@@ -26,14 +26,14 @@ __all__ = [
 
 _Class = TypeVar("_Class", bound=type[Candidate])
 
-_REGISTERED: dict[str, Candidate] = {}
+_REGISTERED: EntryRegistry[Candidate] = EntryRegistry("a candidate")
 
 
 class _Candidates(Sequence[Candidate]):
     """The registered candidates in the catalogue's order, as they are when read."""
 
     def _ordered(self) -> tuple[Candidate, ...]:
-        return tuple(_REGISTERED[name] for name in CATALOGUE if name in _REGISTERED)
+        return tuple(_REGISTERED.view().values())
 
     @overload
     def __getitem__(self, index: int) -> Candidate: ...
@@ -64,11 +64,11 @@ def candidate(name: str) -> Candidate:
     Raises:
         EffectError: no candidate models that effect.
     """
-    try:
-        return _REGISTERED[name]
-    except KeyError:
+    found = _REGISTERED.get(name)
+    if found is None:
         known = ", ".join(c.name for c in CANDIDATES)
-        raise EffectError(f"no candidate for effect {name!r} (known: {known})") from None
+        raise EffectError(f"no candidate for effect {name!r} (known: {known})")
+    return found
 
 
 def register_candidate(item: Candidate) -> Candidate:
@@ -84,15 +84,13 @@ def register_candidate(item: Candidate) -> Candidate:
         raise EffectError(f"candidate {name}: its effect is not in the catalogue")
     if CATALOGUE[name] != item.entry:
         raise EffectError(f"candidate {name}: its entry is not the catalogue's")
-    if name in _REGISTERED:
-        raise EffectError(f"effect {name} has a candidate already")
-    _REGISTERED[name] = item
+    _REGISTERED.add(name, item)
     return item
 
 
 def unregister_candidate(name: str) -> None:
     """Remove the candidate of effect ``name`` (nothing when absent)."""
-    _REGISTERED.pop(name, None)
+    _REGISTERED.remove(name)
 
 
 def register_candidate_class(cls: _Class) -> _Class:

@@ -9,17 +9,16 @@ cases a seed draws do not depend on it.
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping
+from collections.abc import Mapping
 from typing import TypeVar
 
 from brake_hil.physics import catalogue
-from brake_hil.physics.catalogue import EffectEntry
+from brake_hil.physics.catalogue import EntryRegistry
 from brake_hil.virtual_rig.effects.base import Effect, EffectError
 
 __all__ = [
     "EFFECTS",
     "OUT_OF_LIBRARY",
-    "TruthLaws",
     "effect_class",
     "register_effect",
     "unregister_effect",
@@ -27,38 +26,13 @@ __all__ = [
 
 _Law = TypeVar("_Law", bound=type[Effect])
 
-_REGISTERED: dict[str, type[Effect]] = {}
+_REGISTERED: EntryRegistry[type[Effect]] = EntryRegistry("a truth law")
 """Every truth law of family a (and the out-of-library laws) by its catalogue name."""
 
-
-class TruthLaws(Mapping[str, type[Effect]]):
-    """The registered truth laws of one part of the catalogue, in its order (a live view)."""
-
-    def __init__(
-        self, entries: Mapping[str, EffectEntry], registered: Mapping[str, type[Effect]]
-    ) -> None:
-        self._entries = entries
-        self._registered = registered
-
-    def __getitem__(self, name: str) -> type[Effect]:
-        if name not in self._entries:
-            raise KeyError(name)
-        return self._registered[name]
-
-    def __iter__(self) -> Iterator[str]:
-        return (name for name in self._entries if name in self._registered)
-
-    def __len__(self) -> int:
-        return sum(1 for _ in self)
-
-    def __repr__(self) -> str:
-        return f"{type(self).__name__}({list(self)})"
-
-
-EFFECTS: Mapping[str, type[Effect]] = TruthLaws(catalogue.CATALOGUE, _REGISTERED)
+EFFECTS: Mapping[str, type[Effect]] = _REGISTERED.view(catalogue.CATALOGUE)
 """Every effect of the library by its name, in the catalogue's (interface.md's) order."""
 
-OUT_OF_LIBRARY: Mapping[str, type[Effect]] = TruthLaws(catalogue.OUT_OF_LIBRARY, _REGISTERED)
+OUT_OF_LIBRARY: Mapping[str, type[Effect]] = _REGISTERED.view(catalogue.OUT_OF_LIBRARY)
 """Physics outside the library (catalogue.OUT_OF_LIBRARY): what ``unexplained`` verdicts
 are tested on."""
 
@@ -78,15 +52,13 @@ def register_effect(cls: _Law) -> _Law:
     name = cls.entry.name
     if catalogue.entry(name) != cls.entry:
         raise EffectError(f"effect {name}: {cls.__name__}'s entry is not the catalogue's")
-    if name in _REGISTERED:
-        raise EffectError(f"effect {name} has a truth law already ({_REGISTERED[name].__name__})")
-    _REGISTERED[name] = cls
+    _REGISTERED.add(name, cls)
     return cls
 
 
 def unregister_effect(name: str) -> None:
     """Remove the truth law of ``name`` (nothing when there is none)."""
-    _REGISTERED.pop(name, None)
+    _REGISTERED.remove(name)
 
 
 def effect_class(name: str) -> type[Effect]:

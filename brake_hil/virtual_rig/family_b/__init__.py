@@ -20,6 +20,7 @@ from __future__ import annotations
 from functools import cache
 import importlib
 import pkgutil
+from types import ModuleType
 
 from brake_hil.virtual_rig.effects.base import Effect
 from brake_hil.virtual_rig.family_b.base import (
@@ -58,20 +59,30 @@ OUTSIDE_B: tuple[str, ...]
 
 
 @cache
-def outside_names() -> tuple[str, ...]:
-    """``OUTSIDE_NAMES`` of the family-b out-of-library module, or family a's when it is absent.
-
-    Importing the module registers its truth laws
-    (:func:`brake_hil.virtual_rig.effects.effect_class` finds them).
-    """
+def _outside_module() -> ModuleType | None:
+    """The family-b out-of-library module, imported once; None when it is absent."""
     try:
-        module = importlib.import_module(_OUTSIDE_MODULE)
+        return importlib.import_module(_OUTSIDE_MODULE)
     except ModuleNotFoundError as error:
         if error.name != _OUTSIDE_MODULE:
             raise
-        return _OUTSIDE_FALLBACK
+        return None
+
+
+def outside_names() -> tuple[str, ...]:
+    """``OUTSIDE_NAMES`` of the family-b out-of-library module, or family a's when it is absent.
+
+    Their truth laws are registered (again, if something took them out) before the names are
+    given, so :func:`brake_hil.virtual_rig.effects.effect_class` finds every one.
+    """
+    module = _outside_module()
     names = getattr(module, "OUTSIDE_NAMES", None)
-    return tuple(str(name) for name in names) if names else _OUTSIDE_FALLBACK
+    if not names:
+        return _OUTSIDE_FALLBACK
+    register = getattr(module, "register_outside", None)
+    if register is not None:
+        register()  # idempotent
+    return tuple(str(name) for name in names)
 
 
 def is_family_b_law(cls: type[Effect]) -> bool:

@@ -21,9 +21,8 @@ from typing import Any, ClassVar, TypeVar
 
 from brake_hil.errors import EffectError
 from brake_hil.physics import catalogue
-from brake_hil.physics.catalogue import EffectEntry
+from brake_hil.physics.catalogue import EffectEntry, EntryRegistry
 from brake_hil.virtual_rig.effects.base import Effect
-from brake_hil.virtual_rig.effects.registry import TruthLaws
 
 __all__ = [
     "EFFECTS_B",
@@ -70,10 +69,10 @@ FamilyBEffect.signature = _CatalogueSignature()  # type: ignore[assignment]
 
 _Law = TypeVar("_Law", bound=type[FamilyBEffect])
 
-_REGISTERED: dict[str, type[Effect]] = {}
+_REGISTERED: EntryRegistry[type[Effect]] = EntryRegistry("a family-b law")
 """Every family-b truth law by its catalogue name."""
 
-EFFECTS_B: Mapping[str, type[Effect]] = TruthLaws(catalogue.CATALOGUE, _REGISTERED)
+EFFECTS_B: Mapping[str, type[Effect]] = _REGISTERED.view(catalogue.CATALOGUE)
 """Family b's law of every library effect by its name, in the catalogue's order (live)."""
 
 
@@ -92,14 +91,10 @@ def register_effect_b(cls: _Law) -> _Law:
     name = cls.name
     if name not in catalogue.CATALOGUE:
         raise EffectError(f"family-b law {cls.__name__}: effect {name} is not in the library")
-    if name in _REGISTERED:
-        raise EffectError(
-            f"effect {name} has a family-b law already ({_REGISTERED[name].__name__})"
-        )
-    _REGISTERED[name] = cls
+    _REGISTERED.add(name, cls)
     return cls
 
 
 def unregister_effect_b(name: str) -> None:
     """Remove the family-b truth law of ``name`` (nothing when there is none)."""
-    _REGISTERED.pop(name, None)
+    _REGISTERED.remove(name)
