@@ -17,7 +17,15 @@ from scipy.interpolate import CubicSpline
 from brake_hil.physics.lti_model import ModelInput, discretize, state_space
 from brake_hil.types import FloatArray
 from brake_hil.virtual_rig.excitation import Excitation
-from brake_hil.virtual_rig.laws import LineFlow, LinePorts, Signal, State, TruthLaw, hooked
+from brake_hil.virtual_rig.laws import (
+    LineFlow,
+    LinePorts,
+    SealPorts,
+    Signal,
+    State,
+    TruthLaw,
+    hooked,
+)
 from brake_hil.virtual_rig.plant import Plant
 
 __all__ = ["LOWEST_OPERATING_PRESSURE", "Dynamics", "ProgressCallback"]
@@ -384,9 +392,8 @@ class Dynamics:
         )
         if ports.seal is not None:
             own = self.seal_states
-            seal_force, derivative[own] = ports.seal.seal_force(
-                seal_force, seal_v, ports.seal_asymmetry, modulus, viscosity, x[own]
-            )
+            seal = SealPorts(seal_force, seal_v, ports.seal_asymmetry, modulus, viscosity)
+            seal_force, derivative[own] = ports.seal.seal_force(seal, x[own])
         return seal_force
 
     def _caliper_share(self, pressure_force: Signal) -> Signal:

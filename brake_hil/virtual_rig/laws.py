@@ -50,6 +50,7 @@ __all__ = [
     "LineFlow",
     "LinePorts",
     "LtiPlant",
+    "SealPorts",
     "Signal",
     "State",
     "TruthLaw",
@@ -115,6 +116,17 @@ class LinePorts:
         return (
             self.master_pressure - self.bore_pressure - self.upstream_drop - hose_drop
         ) / self.inertance
+
+
+@dataclass(frozen=True)
+class SealPorts:
+    """What the host hands the seal-force port at one instant (SI)."""
+
+    spring_force: Signal  # E(t) (k_eh x_eff + c_eh v), N (eqs. 21e-f)
+    velocity: Signal  # seal velocity x_p' - x_c', m/s
+    asymmetry: float  # the seal's apply/release asymmetry (seal_asymmetry, summed), -
+    modulus_factor: Signal  # the seal modulus's drift factor, -
+    viscosity_factor: Signal  # the fluid viscosity's drift factor, -
 
 
 LineFlow: TypeAlias = tuple[Signal, list[Signal], Signal, Signal]
@@ -218,30 +230,14 @@ class TruthLaw:
         """
         return 1.0
 
-    def seal_force(
-        self,
-        spring_force: Signal,
-        velocity: Signal,
-        asymmetry: float,
-        modulus_factor: Signal,
-        viscosity_factor: Signal,
-        states: Sequence[Signal],
-    ) -> tuple[Signal, list[Signal]]:
+    def seal_force(self, seal: SealPorts, states: Sequence[Signal]) -> tuple[Signal, list[Signal]]:
         """The seals' force on the piston (N), and the own states' rates.
 
-        Made of the equivalent spring and damper's ``spring_force`` (N), at the seal velocity
-        ``x_p' - x_c'`` (m/s).
-
-        Args:
-            spring_force: ``E(t) (k_eh x_eff + c_eh v)`` (N), eqs. 21e-f.
-            velocity: seal velocity (m/s).
-            asymmetry: the seal's apply/release asymmetry (:meth:`seal_asymmetry`, summed).
-            modulus_factor: the seal modulus's drift factor (-).
-            viscosity_factor: the fluid viscosity's drift factor (-).
-            states: the law's own states (SI).
+        Made of the equivalent spring and damper's force, at the seal's state of this instant
+        (:class:`SealPorts`); ``states`` are the law's own (SI).
         """
-        del velocity, asymmetry, modulus_factor, viscosity_factor, states
-        return spring_force, []
+        del states
+        return seal.spring_force, []
 
     def structural_damping(self) -> tuple[float, float]:
         """Damping (N s/m) of the caliper to ground and of the piston to the block."""

@@ -19,7 +19,7 @@ import numpy as np
 
 from brake_hil.physics.parameters import ModelParameters
 from brake_hil.virtual_rig import _math as fm
-from brake_hil.virtual_rig.laws import Signal, State, TruthLaw
+from brake_hil.virtual_rig.laws import SealPorts, Signal, State, TruthLaw
 
 __all__ = [
     "ASYMMETRY_WIDTH_SHARE",
@@ -117,15 +117,8 @@ class FrictionalSeal(TruthLaw):
     caliper_damping: float  # N s/m, caliper to ground, kept where c_eh is replaced
     block_damping: float  # N s/m, piston to block (load cells)
 
-    def own_force(
-        self,
-        deflection: Signal,
-        velocity: Signal,
-        asymmetry: float,
-        modulus_factor: Signal,
-        viscosity_factor: Signal,
-    ) -> tuple[Signal, Signal]:
-        """The law's own seal force (N) and the deflection's rate ``z'`` (m/s)."""
+    def own_force(self, deflection: Signal, seal: SealPorts) -> tuple[Signal, Signal]:
+        """The law's own seal force (N) and the rate ``z'`` (m/s) of the deflection ``z`` (m)."""
         raise NotImplementedError
 
     def rest_limit(self) -> float:
@@ -145,20 +138,10 @@ class FrictionalSeal(TruthLaw):
         """What the equivalent spring and damper keep: ``1 - share``."""
         return 1.0 - self.share
 
-    def seal_force(
-        self,
-        spring_force: Signal,
-        velocity: Signal,
-        asymmetry: float,
-        modulus_factor: Signal,
-        viscosity_factor: Signal,
-        states: Sequence[Signal],
-    ) -> tuple[Signal, list[Signal]]:
+    def seal_force(self, seal: SealPorts, states: Sequence[Signal]) -> tuple[Signal, list[Signal]]:
         """``(1 - share) F_spring + share F_own`` (N), and ``z'`` (m/s)."""
-        own, rate = self.own_force(
-            states[0], velocity, asymmetry, modulus_factor, viscosity_factor
-        )
-        force = (1.0 - self.share) * spring_force + self.share * own
+        own, rate = self.own_force(states[0], seal)
+        force = (1.0 - self.share) * seal.spring_force + self.share * own
         return force, [rate]
 
     def structural_damping(self) -> tuple[float, float]:

@@ -10,7 +10,7 @@ from brake_hil.physics.parameters import seal_properties
 from brake_hil.virtual_rig import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
 from brake_hil.virtual_rig.effects.registry import register_effect
-from brake_hil.virtual_rig.laws import LtiPlant, Signal
+from brake_hil.virtual_rig.laws import LtiPlant, SealPorts, Signal
 from brake_hil.virtual_rig.mechanics import (
     ASYMMETRY_WIDTH_SHARE,
     FrictionalSeal,
@@ -80,18 +80,12 @@ class LuGreSeal(FrictionalSeal):
         """At rest the seals are sheared below their slip limit (m)."""
         return 0.99 * self.coulomb_force / self.bristle_stiffness
 
-    def own_force(
-        self,
-        deflection: Signal,
-        velocity: Signal,
-        asymmetry: float,
-        modulus_factor: Signal,
-        viscosity_factor: Signal,
-    ) -> tuple[Signal, Signal]:
+    def own_force(self, deflection: Signal, seal: SealPorts) -> tuple[Signal, Signal]:
         """The LuGre force (N) and ``z'`` (m/s)."""
-        slip = self.slip_force(velocity, deflection, asymmetry, modulus_factor)
-        z_rate = self.deflection_rate(deflection, velocity, slip, modulus_factor)
-        friction = self.force(deflection, z_rate, velocity, modulus_factor, viscosity_factor)
+        velocity, modulus = seal.velocity, seal.modulus_factor
+        slip = self.slip_force(velocity, deflection, seal.asymmetry, modulus)
+        z_rate = self.deflection_rate(deflection, velocity, slip, modulus)
+        friction = self.force(deflection, z_rate, velocity, modulus, seal.viscosity_factor)
         return friction, z_rate
 
 

@@ -11,7 +11,7 @@ from brake_hil.physics.parameters import seal_properties
 from brake_hil.virtual_rig import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
 from brake_hil.virtual_rig.family_b.base import FamilyBEffect, register_effect_b
-from brake_hil.virtual_rig.laws import LtiPlant, Signal
+from brake_hil.virtual_rig.laws import LtiPlant, SealPorts, Signal
 from brake_hil.virtual_rig.mechanics import (
     ASYMMETRY_WIDTH_SHARE,
     FrictionalSeal,
@@ -66,23 +66,17 @@ class BoucWenSeal(FrictionalSeal):
         """At rest the seals are sheared below their yield (m)."""
         return 0.9 * self.yield_deflection
 
-    def own_force(
-        self,
-        deflection: Signal,
-        velocity: Signal,
-        asymmetry: float,
-        modulus_factor: Signal,
-        viscosity_factor: Signal,
-    ) -> tuple[Signal, Signal]:
+    def own_force(self, deflection: Signal, seal: SealPorts) -> tuple[Signal, Signal]:
         """``E k z + c_r v + mu c_f v`` (N), and ``z'`` (m/s).
 
         The seal modulus's drift factor ``E`` scales the stiffness and (through the squeeze
         force) the yield force alike, so the yield deflection stays.
         """
-        rate = self.deflection_rate(deflection, velocity, asymmetry)
+        velocity = seal.velocity
+        rate = self.deflection_rate(deflection, velocity, seal.asymmetry)
         hysteretic = (
-            self.stiffness * modulus_factor * deflection
-            + (self.internal_damping + self.film_damping * viscosity_factor) * velocity
+            self.stiffness * seal.modulus_factor * deflection
+            + (self.internal_damping + self.film_damping * seal.viscosity_factor) * velocity
         )
         return hysteretic, rate
 
