@@ -2,24 +2,28 @@
 
 An entry is what every part of brake_hil agrees an effect *is*: its name (interface.md's
 effect table), the physics in words, where that physics is written down, how it shows in a
-recording, which measured channels it reaches, and the physical quantities it is described
-by with their units. Two families point to each entry:
+recording, which measured channels it reaches, the physical quantities it is described by
+with their units, and what the reports say of it (the rig check of the diagnosis report, the
+trend's words and cause, the calibrated values its misfit shows up in). Three things point to
+each entry:
 
-* the virtual rig's *truth law* (:mod:`brake_hil.virtual_rig.effects`), the richer physics
-  that makes test recordings;
+* the virtual rig's *truth laws* (:mod:`brake_hil.virtual_rig.effects` and
+  :mod:`brake_hil.virtual_rig.family_b`, two structurally different ones), the richer
+  physics that makes test recordings;
 * the diagnosis's *candidate* (:mod:`brake_hil.diagnosis.candidates`), the simpler model
   fitted to a recording.
 
-Adding an effect is one entry here (:func:`register` for one made at run time), one truth law
-and one candidate (CONTRIBUTING.md). Physics outside the library (what ``unexplained`` is
-tested on) has entries in :data:`OUT_OF_LIBRARY`: a truth law and no candidate.
+Adding an effect is one entry here (:func:`register` for one made at run time), a truth law
+of each family and one candidate (CONTRIBUTING.md); each registers itself. Physics outside
+the library (what ``unexplained`` is tested on) has entries in :data:`OUT_OF_LIBRARY`: a
+truth law and no candidate.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import Generic, NamedTuple, TypeVar
 
 from brake_hil.errors import EffectError
 
@@ -27,10 +31,13 @@ __all__ = [
     "CATALOGUE",
     "OUT_OF_LIBRARY",
     "EffectEntry",
+    "EntryRegistry",
     "Quantity",
     "effect_names",
     "entry",
+    "entry_text",
     "register",
+    "stand_ins",
     "unregister",
 ]
 
@@ -48,7 +55,7 @@ class Quantity(NamedTuple):
 
 @dataclass(frozen=True)
 class EffectEntry:
-    """One effect of the library (or out of it): what both families point to."""
+    """One effect of the library (or out of it): what its truth laws and candidate point to."""
 
     name: str  # interface.md's effect name
     title: str  # one line
@@ -57,6 +64,10 @@ class EffectEntry:
     signature: str  # how it shows in a recording
     channels: tuple[str, ...]  # the measured outputs its physics reaches
     quantities: tuple[Quantity, ...]  # what it is described by, with units
+    rig_check: str = ""  # what to look at on the rig when a diagnosis names it
+    label: str = ""  # how a trend names it, e.g. "seal stick-slip" (empty: the title)
+    cause: str = ""  # what a growing strength of it points to on the rig
+    stands_in_for: tuple[str, ...] = ()  # calibrated values its misfit shows up in
 
     def __post_init__(self) -> None:
         if unknown := [c for c in self.channels if c not in CHANNELS]:
@@ -124,6 +135,10 @@ CATALOGUE = _Catalogue(
                 _q("F_fs", "N", "static friction threshold of one seal"),
                 _q("phi", "-", "share of the seal force carried by friction"),
             ),
+            rig_check="the piston seals: wear, swell, groove fill and lubrication",
+            label="seal stick-slip",
+            cause="seal wear",
+            stands_in_for=("effective_hydraulic_stiffness", "effective_hydraulic_damping"),
         ),
         EffectEntry(
             name="seal_groove_asymmetry",
@@ -142,6 +157,10 @@ CATALOGUE = _Catalogue(
                 _q("a", "-", "asymmetry: stiffness (1 - a) on apply, (1 + a) on release"),
                 _q("tau_r", "s", "creep time of the seal's relaxed position"),
             ),
+            rig_check="the seal grooves: chamfers and the seal's fit on each side",
+            label="seal groove asymmetry",
+            cause="seal wear",
+            stands_in_for=("effective_hydraulic_stiffness", "effective_hydraulic_damping"),
         ),
         EffectEntry(
             name="entrained_air",
@@ -158,6 +177,10 @@ CATALOGUE = _Catalogue(
             ),
             channels=("p_b", "F_k", "x_c"),
             quantities=(_q("j", "-", "free-air volume fraction of the fluid at gauge zero"),),
+            rig_check="air in the hydraulic line: bleed the caliper and the hose",
+            label="entrained air",
+            cause="air in the fluid: bleed the circuit",
+            stands_in_for=("air_fraction", "bore_compliance"),
         ),
         EffectEntry(
             name="orifice_flow",
@@ -174,6 +197,10 @@ CATALOGUE = _Catalogue(
             ),
             channels=("p_b", "F_k", "x_c"),
             quantities=(_q("K", "Pa s^2/m^6", "orifice coefficient of dp = K Q |Q|"),),
+            rig_check="the needle valve: its setting and whether it is partly blocked",
+            label="turbulent valve flow",
+            cause="the valve's flow regime changed",
+            stands_in_for=("valve_resistance",),
         ),
         EffectEntry(
             name="hose_compliance",
@@ -194,6 +221,10 @@ CATALOGUE = _Catalogue(
                 _q("C_d", "m^3/Pa", "the hose wall's retarded compliance"),
                 _q("tau_w", "s", "the wall's retardation time"),
             ),
+            rig_check="the hose: its type, length and age (a hose that swells)",
+            label="hose compliance",
+            cause="hose ageing or a new hose",
+            stands_in_for=("hose_stiffness",),
         ),
         EffectEntry(
             name="bore_friction",
@@ -209,6 +240,9 @@ CATALOGUE = _Catalogue(
             ),
             channels=("F_k", "x_c"),
             quantities=(_q("mu_fb", "-", "piston-bore friction coefficient"),),
+            rig_check="the piston bores: scoring, dirt, alignment of the pistons",
+            label="bore friction",
+            cause="caliper cocking: check the piston and bore",
         ),
         EffectEntry(
             name="eccentric_load",
@@ -227,6 +261,9 @@ CATALOGUE = _Catalogue(
                 _q("s0", "-", "change of the caliper's force share at the reference load"),
                 _q("s1", "-", "change of the share per reference pressure"),
             ),
+            rig_check="the caliper's alignment and the washers' seating (uneven load)",
+            label="eccentric load",
+            cause="check the load path",
         ),
         EffectEntry(
             name="thermal_drift",
@@ -245,6 +282,9 @@ CATALOGUE = _Catalogue(
                 _q("r_R", "1/s", "relative drift rate of the line resistance"),
                 _q("r_s", "1/s", "relative drift rate of k_eh and c_eh"),
             ),
+            rig_check="the temperature of fluid and caliper: let the rig warm up, log it",
+            label="thermal drift",
+            cause="temperature not settled",
         ),
         EffectEntry(
             name="sensor_delay",
@@ -260,6 +300,9 @@ CATALOGUE = _Catalogue(
             ),
             channels=("p_b", "F_k", "x_c"),
             quantities=(_q("d", "s", "delay of a channel relative to p_i"),),
+            rig_check="the DAQ channel of the late sensor: its filter and sample timing",
+            label="sensor delay",
+            cause="DAQ timing",
         ),
     )
 )
@@ -282,6 +325,114 @@ OUT_OF_LIBRARY = _Catalogue(
     )
 )
 """Physics no candidate models: a case with it is labelled ``unexplained``."""
+
+
+class _EntryText(Mapping[str, str]):
+    """One text field of the library's entries, by name, for those that set it (a live view)."""
+
+    def __init__(self, field: str) -> None:
+        self._field = field
+
+    def __getitem__(self, name: str) -> str:
+        text = getattr(CATALOGUE[name], self._field)
+        if not isinstance(text, str) or not text:
+            raise KeyError(name)
+        return text
+
+    def __iter__(self) -> Iterator[str]:
+        return (name for name, item in CATALOGUE.items() if getattr(item, self._field))
+
+    def __len__(self) -> int:
+        return sum(1 for _ in self)
+
+    def __repr__(self) -> str:
+        return f"entry_text({self._field!r}: {list(self)})"
+
+
+def entry_text(field: str) -> Mapping[str, str]:
+    """One text field (``rig_check``, ``label``, ``cause``) of the library's entries, by name.
+
+    Only the entries that set it, in catalogue order, as the catalogue is when read.
+
+    Raises:
+        EffectError: ``field`` is no text field of an entry.
+    """
+    if field not in {"rig_check", "label", "cause"}:
+        raise EffectError(f"entry_text: {field!r} is not a text field of an effect entry")
+    return _EntryText(field)
+
+
+def stand_ins() -> dict[str, tuple[str, ...]]:
+    """Each calibrated value and the library effects whose misfit shows up in it.
+
+    From every entry's ``stands_in_for``, the effects in catalogue order.
+    """
+    found: dict[str, tuple[str, ...]] = {}
+    for item in CATALOGUE.values():
+        for value in item.stands_in_for:
+            found[value] = (*found.get(value, ()), item.name)
+    return found
+
+
+_Item = TypeVar("_Item")
+
+
+class _InCatalogueOrder(Mapping[str, _Item]):
+    """A registry's items of one part of the catalogue, in its order (a live view)."""
+
+    def __init__(self, entries: Mapping[str, EffectEntry], items: Mapping[str, _Item]) -> None:
+        self._entries = entries
+        self._items = items
+
+    def __getitem__(self, name: str) -> _Item:
+        if name not in self._entries:
+            raise KeyError(name)
+        return self._items[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return (name for name in self._entries if name in self._items)
+
+    def __len__(self) -> int:
+        return sum(1 for _ in self)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({list(self)})"
+
+
+class EntryRegistry(Generic[_Item]):
+    """What points to the catalogue's entries (a truth law, a candidate), one per effect.
+
+    Read through :meth:`view`, in the catalogue's order whatever the order of registration,
+    so what draws from it (a case schedule, a diagnosis) is the same on every run.
+    """
+
+    def __init__(self, kind: str) -> None:
+        self.kind = kind  # what one item is, in messages: "a truth law", "a candidate"
+        self._items: dict[str, _Item] = {}
+
+    def add(self, name: str, item: _Item) -> None:
+        """Register ``item`` for the effect ``name``.
+
+        Raises:
+            EffectError: that effect has one already.
+        """
+        if name in self._items:
+            held = self._items[name]
+            shown = getattr(held, "__name__", type(held).__name__)
+            raise EffectError(f"effect {name} has {self.kind} already ({shown})")
+        self._items[name] = item
+
+    def remove(self, name: str) -> None:
+        """Take out the item of ``name`` (nothing when there is none)."""
+        self._items.pop(name, None)
+
+    def get(self, name: str) -> _Item | None:
+        """The item of ``name``, or None."""
+        return self._items.get(name)
+
+    def view(self, entries: Mapping[str, EffectEntry] | None = None) -> Mapping[str, _Item]:
+        """The items of ``entries`` (default: the library), in their order, as they are read."""
+        return _InCatalogueOrder(CATALOGUE if entries is None else entries, self._items)
 
 
 def effect_names() -> tuple[str, ...]:

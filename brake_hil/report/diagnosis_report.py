@@ -11,6 +11,7 @@ is not the verdict, and the fitted parameters, those the data did not identify a
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from datetime import UTC, datetime
 import html
@@ -36,7 +37,8 @@ from brake_hil.diagnosis.diagnose import (  # noqa: E402
 from brake_hil.diagnosis.evidence import PHASE_BINS  # noqa: E402
 from brake_hil.diagnosis.fitting import Fit, Model  # noqa: E402
 from brake_hil.files import output_file  # noqa: E402
-from brake_hil.physics.catalogue import CATALOGUE  # noqa: E402
+from brake_hil.physics.calibrated_values import VALUE_LABELS  # noqa: E402
+from brake_hil.physics.catalogue import CATALOGUE, entry_text  # noqa: E402
 from brake_hil.topics import OUTPUT_CHANNELS  # noqa: E402
 
 __all__ = [
@@ -75,27 +77,12 @@ FLAG_SIGMA = 3.0
 IDENTIFIED_RELATIVE_SIGMA = 0.5
 """A parameter is identified when its one sigma is below this share of its value."""
 
-MULTIPLIER_WORDS = {
-    "caliper_stiffness": "caliper stiffness",
-    "valve_resistance": "needle-valve resistance",
-    "effective_hydraulic_stiffness": "seal stiffness k_eh (from the seal values)",
-    "effective_hydraulic_damping": "seal damping c_eh (from the seal values)",
-    "air_fraction": "fluid air fraction",
-    "bore_compliance": "bore compliance C_b",
-    "hose_stiffness": "hose wall modulus",
+MULTIPLIER_WORDS: Mapping[str, str] = {
+    name: label.report_words for name, label in VALUE_LABELS.items()
 }
-RIG_CHECKS = {
-    "seal_stick_slip": "the piston seals: wear, swell, groove fill and lubrication",
-    "seal_groove_asymmetry": "the seal grooves: chamfers and the seal's fit on each side",
-    "entrained_air": "air in the hydraulic line: bleed the caliper and the hose",
-    "orifice_flow": "the needle valve: its setting and whether it is partly blocked",
-    "hose_compliance": "the hose: its type, length and age (a hose that swells)",
-    "thermal_drift": "the temperature of fluid and caliper: let the rig warm up, log it",
-    "sensor_delay": "the DAQ channel of the late sensor: its filter and sample timing",
-    "eccentric_load": "the caliper's alignment and the washers' seating (uneven load)",
-    "bore_friction": "the piston bores: scoring, dirt, alignment of the pistons",
-}
-"""What to look at on the rig for each effect (test: one per catalogue entry)."""
+"""How the calibration table names each calibrated value (``physics.calibrated_values``)."""
+RIG_CHECKS: Mapping[str, str] = entry_text("rig_check")
+"""What to look at on the rig for each effect: its catalogue entry's ``rig_check`` (live)."""
 
 
 def write_report(diagnosis: Diagnosis, out: Path, rig_path: Path | None = None) -> Path:

@@ -37,7 +37,7 @@ With 4 % scatter a 12 % fall is found in 88 % of 40-run fleets, 48 % of 20-run o
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
 import math
@@ -47,7 +47,8 @@ import numpy as np
 from scipy import stats
 
 from brake_hil.diagnosis.physics_checks import IDENTIFIABLE_SHARE
-from brake_hil.physics.catalogue import CATALOGUE
+from brake_hil.physics.calibrated_values import VALUE_LABELS
+from brake_hil.physics.catalogue import CATALOGUE, stand_ins
 from brake_hil.results.store import DiagnosisRow
 from brake_hil.types import BoolArray, FloatArray, IntArray
 
@@ -97,37 +98,52 @@ class Advice(NamedTuple):
     cause: str  # e.g. "check the caliper mounting"
 
 
-ADVICE: Final[Mapping[str, Advice]] = {
-    "caliper_stiffness": Advice("caliper stiffness", "check the caliper mounting"),
-    "valve_resistance": Advice("needle-valve resistance", "the needle valve setting moved"),
-    "effective_hydraulic_stiffness": Advice("seal stiffness k_eh", "seal wear"),
-    "effective_hydraulic_damping": Advice("seal damping c_eh", "seal wear"),
-    "air_fraction": Advice("fluid air fraction", "air in the fluid: bleed the circuit"),
-    "bore_compliance": Advice("bore compliance C_b", "air in the fluid: bleed the circuit"),
-    "hose_stiffness": Advice("hose wall modulus", "hose ageing or a new hose"),
-    "seal_stick_slip": Advice("seal stick-slip", "seal wear"),
-    "seal_groove_asymmetry": Advice("seal groove asymmetry", "seal wear"),
-    "entrained_air": Advice("entrained air", "air in the fluid: bleed the circuit"),
-    "orifice_flow": Advice("turbulent valve flow", "the valve's flow regime changed"),
-    "hose_compliance": Advice("hose compliance", "hose ageing or a new hose"),
-    "bore_friction": Advice("bore friction", "caliper cocking: check the piston and bore"),
-    "eccentric_load": Advice("eccentric load", "check the load path"),
-    "thermal_drift": Advice("thermal drift", "temperature not settled"),
-    "sensor_delay": Advice("sensor delay", "DAQ timing"),
-}
+_NO_CAUSE = "see the diagnosis report of the last run"
+"""What an effect whose catalogue entry names no cause points to."""
+
+
+class _Advice(Mapping[str, Advice]):
+    """Every calibrated value's and library effect's advice, as the catalogue is when read.
+
+    A value's from :data:`~brake_hil.physics.calibrated_values.VALUE_LABELS`, an effect's from
+    its catalogue entry (``label``, else its title; ``cause``).
+    """
+
+    def __getitem__(self, name: str) -> Advice:
+        if name in VALUE_LABELS:
+            label = VALUE_LABELS[name]
+            return Advice(label.words, label.cause)
+        item = CATALOGUE[name]
+        return Advice(item.label or item.title, item.cause or _NO_CAUSE)
+
+    def __iter__(self) -> Iterator[str]:
+        yield from VALUE_LABELS
+        yield from (name for name in CATALOGUE if name not in VALUE_LABELS)
+
+    def __len__(self) -> int:
+        return sum(1 for _ in self)
+
+
+class _StandsInFor(Mapping[str, tuple[str, ...]]):
+    """Each calibrated value and the effects standing in it, from the entries (live)."""
+
+    def __getitem__(self, name: str) -> tuple[str, ...]:
+        return stand_ins()[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(stand_ins())
+
+    def __len__(self) -> int:
+        return len(stand_ins())
+
+
+ADVICE: Final[Mapping[str, Advice]] = _Advice()
 """Per calibrated value and effect (a test holds it to the calibration and the catalogue);
 the diagnosis report's ``RIG_CHECKS`` says in more words what to look at for an effect."""
 
-
-STANDS_IN_FOR: Final[Mapping[str, tuple[str, ...]]] = {
-    "effective_hydraulic_stiffness": ("seal_stick_slip", "seal_groove_asymmetry"),
-    "effective_hydraulic_damping": ("seal_stick_slip", "seal_groove_asymmetry"),
-    "air_fraction": ("entrained_air",),
-    "bore_compliance": ("entrained_air",),
-    "hose_stiffness": ("hose_compliance",),
-    "valve_resistance": ("orifice_flow",),
-}
-"""Calibrated LTI values and the effects whose misfit the calibration puts into them."""
+STANDS_IN_FOR: Final[Mapping[str, tuple[str, ...]]] = _StandsInFor()
+"""Calibrated LTI values and the effects whose misfit the calibration puts into them (each
+entry's ``stands_in_for``, the effects in catalogue order)."""
 
 
 class Movement(StrEnum):
@@ -223,10 +239,9 @@ def identified(prior_sigma: float, posterior_sigma: float) -> bool:
 
 
 def _advice(name: str) -> Advice:
-    if name in ADVICE:
+    if name in VALUE_LABELS or name in CATALOGUE:
         return ADVICE[name]
-    title = CATALOGUE[name].title if name in CATALOGUE else name.replace("_", " ")
-    return Advice(title, "see the diagnosis report of the last run")
+    return Advice(name.replace("_", " "), _NO_CAUSE)
 
 
 def trends(rows: Iterable[DiagnosisRow]) -> list[RigTrend]:

@@ -48,7 +48,9 @@ __all__ = [
     "HOOKS",
     "STATEFUL_HOOKS",
     "LineFlow",
+    "LinePorts",
     "LtiPlant",
+    "SealPorts",
     "Signal",
     "State",
     "TruthLaw",
@@ -88,6 +90,43 @@ class State(NamedTuple):
 
     name: str
     scale: float
+
+
+@dataclass(frozen=True)
+class LinePorts:
+    """What the host hands the line port at one instant (SI): the line's ends and makings."""
+
+    master_pressure: Signal  # p_i, Pa
+    bore_pressure: Signal  # p_b, Pa
+    flow: Signal  # Q_h, m^3/s: the host's state through pipe and valve (the whole inertance)
+    upstream_drop: Signal  # pressure drop over hard pipe and valve, Pa
+    hose_resistance: Signal  # R_t at the present viscosity, Pa s/m^3
+    inertance: float  # I_r + I_t, Pa s^2/m^3
+    fluid_compliance: Signal  # per unit volume: fluid and the rig's own air (eq. 18), 1/Pa
+    extra_compliance: Callable[[Signal], Signal] | None  # the laws' extra, per unit volume
+
+    def compliance_at(self, pressure: Signal) -> Signal:
+        """Compliance per unit volume (1/Pa) at ``pressure`` (Pa): the fluid's plus the laws'."""
+        if self.extra_compliance is None:
+            return self.fluid_compliance
+        return self.fluid_compliance + self.extra_compliance(pressure)
+
+    def lumped_rate(self, hose_drop: Signal) -> Signal:
+        """``dQ_h/dt`` (m^3/s^2) of eq. 21c: ``(p_i - p_b - dp_upstream - dp_hose) / I``."""
+        return (
+            self.master_pressure - self.bore_pressure - self.upstream_drop - hose_drop
+        ) / self.inertance
+
+
+@dataclass(frozen=True)
+class SealPorts:
+    """What the host hands the seal-force port at one instant (SI)."""
+
+    spring_force: Signal  # E(t) (k_eh x_eff + c_eh v), N (eqs. 21e-f)
+    velocity: Signal  # seal velocity x_p' - x_c', m/s
+    asymmetry: float  # the seal's apply/release asymmetry (seal_asymmetry, summed), -
+    modulus_factor: Signal  # the seal modulus's drift factor, -
+    viscosity_factor: Signal  # the fluid viscosity's drift factor, -
 
 
 LineFlow: TypeAlias = tuple[Signal, list[Signal], Signal, Signal]
@@ -148,44 +187,21 @@ class TruthLaw:
         del viscosity_factor
         return linear_resistance * linear_factor * flow
 
-    def line_flow(
-        self,
-        master_pressure: Signal,
-        bore_pressure: Signal,
-        flow: Signal,
-        upstream_drop: Signal,
-        hose_resistance: Signal,
-        inertance: float,
-        fluid_compliance: Signal,
-        extra_compliance: Callable[[Signal], Signal] | None,
-        states: Sequence[Signal],
-    ) -> LineFlow:
+    def line_flow(self, line: LinePorts, states: Sequence[Signal]) -> LineFlow:
         """The line from the valve outlet to the bore, with the law's own states.
 
         The default is the host's own line, lumped (eq. 21c):
         ``I Q_h' = p_i - p_b - dp_upstream - R_t Q_h``, all of ``Q_h`` entering the bore.
 
         Args:
-            master_pressure: ``p_i`` (Pa).
-            bore_pressure: ``p_b`` (Pa).
-            flow: ``Q_h`` (m^3/s), the host's state through hard pipe and valve, carrying the
-                line's whole inertance.
-            upstream_drop: pressure drop over hard pipe and valve (Pa).
-            hose_resistance: ``R_t`` at the present viscosity (Pa s/m^3).
-            inertance: ``I_r + I_t`` (Pa s^2/m^3).
-            fluid_compliance: per unit volume, the fluid and the rig's own air (eq. 18 without
-                the walls, 1/Pa).
-            extra_compliance: the laws' extra compliance per unit volume (1/Pa) at a gauge
-                pressure (Pa), or None.
+            line: the line's ends, flow and makings at this instant (:class:`LinePorts`).
             states: the law's own states (SI).
 
         Returns:
             ``(dQ_h/dt, own states' rates, flow into the bore, compliance added to the bore)``.
         """
-        del fluid_compliance, extra_compliance, states
-        hose_drop = hose_resistance * flow
-        rate = (master_pressure - bore_pressure - upstream_drop - hose_drop) / inertance
-        return rate, [], flow, 0.0
+        del states
+        return line.lumped_rate(line.hose_resistance * line.flow), [], line.flow, 0.0
 
     def seal_asymmetry(self) -> float:
         """Apply/release asymmetry ``a`` (-) of the seal.
@@ -214,30 +230,14 @@ class TruthLaw:
         """
         return 1.0
 
-    def seal_force(
-        self,
-        spring_force: Signal,
-        velocity: Signal,
-        asymmetry: float,
-        modulus_factor: Signal,
-        viscosity_factor: Signal,
-        states: Sequence[Signal],
-    ) -> tuple[Signal, list[Signal]]:
+    def seal_force(self, seal: SealPorts, states: Sequence[Signal]) -> tuple[Signal, list[Signal]]:
         """The seals' force on the piston (N), and the own states' rates.
 
-        Made of the equivalent spring and damper's ``spring_force`` (N), at the seal velocity
-        ``x_p' - x_c'`` (m/s).
-
-        Args:
-            spring_force: ``E(t) (k_eh x_eff + c_eh v)`` (N), eqs. 21e-f.
-            velocity: seal velocity (m/s).
-            asymmetry: the seal's apply/release asymmetry (:meth:`seal_asymmetry`, summed).
-            modulus_factor: the seal modulus's drift factor (-).
-            viscosity_factor: the fluid viscosity's drift factor (-).
-            states: the law's own states (SI).
+        Made of the equivalent spring and damper's force, at the seal's state of this instant
+        (:class:`SealPorts`); ``states`` are the law's own (SI).
         """
-        del velocity, asymmetry, modulus_factor, viscosity_factor, states
-        return spring_force, []
+        del states
+        return seal.spring_force, []
 
     def structural_damping(self) -> tuple[float, float]:
         """Damping (N s/m) of the caliper to ground and of the piston to the block."""

@@ -165,9 +165,8 @@ def test_unregistered_candidates_leave_the_diagnosis() -> None:
 
 def test_the_hose_wall_stores_the_same_at_every_operating_pressure(default_rig: Rig) -> None:
     """The bore's compliance falls with pressure (the air of eq. 18); the hose wall's swell
-    does not (SAE J1401: one volumetric expansion per pressure). Scaled with each segment's
-    ``C_b``, the node left family b's hoses of seed 1701 1.6-19 times the noise (median 3.5);
-    fixed, 1.3-7.7 (median 2.5)."""
+    does not (SAE J1401: one volumetric expansion per pressure), so the hose node is a fixed
+    multiple of one reference compliance."""
     from brake_hil.diagnosis.candidates.base import rig_context
     from brake_hil.diagnosis.candidates.hose_compliance import HoseNode
 

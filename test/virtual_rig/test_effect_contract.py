@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from brake_hil.physics import catalogue
+from brake_hil.physics.calibrated_values import VALUE_LABELS
 from brake_hil.physics.catalogue import EffectEntry, Quantity, effect_names
 from brake_hil.physics.rig import Rig
 from brake_hil.virtual_rig import (
@@ -66,6 +67,12 @@ def test_every_catalogue_entry_has_exactly_one_truth_law_with_its_signature(
     assert make_effect(item.name).describe().count(item.signature) == 1
     for parameter in cls.parameters:
         assert SI_UNIT.match(parameter.unit), (parameter.name, parameter.unit)
+
+
+@pytest.mark.parametrize("item", catalogue.CATALOGUE.values(), ids=lambda item: item.name)
+def test_every_library_entry_says_what_the_reports_say_of_it(item: EffectEntry) -> None:
+    assert item.rig_check and item.label and item.cause
+    assert set(item.stands_in_for) <= set(VALUE_LABELS)
 
 
 def test_the_truth_laws_follow_the_catalogue_order() -> None:

@@ -23,7 +23,8 @@ from brake_hil.virtual_rig import (
 )
 from brake_hil.virtual_rig.cases import nominal_rigs, plan_cases, select_cases
 from brake_hil.virtual_rig.effects import OUT_OF_LIBRARY, Effect, EffectError, effect_class
-from brake_hil.virtual_rig.family_b import EFFECTS_B, MeasurementChainB, SensorDelayB
+from brake_hil.virtual_rig.family_b import EFFECTS_B, MeasurementChainB
+from brake_hil.virtual_rig.family_b.sensor_delay import SensorDelayB
 from brake_hil.virtual_rig.plant import base_plant
 from test.virtual_rig.conftest import RunFactory
 

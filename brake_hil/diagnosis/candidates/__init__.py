@@ -1,28 +1,26 @@
 """Candidate models of the diagnosis, one module per effect of the catalogue.
 
-The registry holds one candidate per catalogue entry (:mod:`brake_hil.physics.catalogue`);
-:data:`CANDIDATES` lists them in the catalogue's order whenever it is read, so a candidate
-added at run time by :func:`register_candidate` (a plug-in, a test) takes part in every
-diagnosis from then on.
+The registry (:mod:`.registry`) holds one candidate per catalogue entry
+(:mod:`brake_hil.physics.catalogue`); each candidate's class registers itself where it is
+defined (the decorator :func:`register_candidate_class`), and importing this package imports
+every module of its folder. :data:`CANDIDATES` lists them in the catalogue's order whenever
+it is read, so a candidate added at run time by :func:`register_candidate` (a plug-in, a
+test) takes part in every diagnosis from then on.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
-from typing import overload
+import importlib
+import pkgutil
 
 from brake_hil.diagnosis.candidates.base import Candidate, own_columns
-from brake_hil.diagnosis.candidates.bore_friction import BoreFriction
-from brake_hil.diagnosis.candidates.eccentric_load import EccentricLoad
-from brake_hil.diagnosis.candidates.entrained_air import EntrainedAir
-from brake_hil.diagnosis.candidates.hose_compliance import HoseCompliance
-from brake_hil.diagnosis.candidates.orifice_flow import OrificeFlow
-from brake_hil.diagnosis.candidates.seal_groove_asymmetry import SealGrooveAsymmetry
-from brake_hil.diagnosis.candidates.seal_stick_slip import SealStickSlip
-from brake_hil.diagnosis.candidates.sensor_delay import SensorDelay
-from brake_hil.diagnosis.candidates.thermal_drift import ThermalDrift
-from brake_hil.errors import EffectError
-from brake_hil.physics.catalogue import CATALOGUE
+from brake_hil.diagnosis.candidates.registry import (
+    CANDIDATES,
+    candidate,
+    register_candidate,
+    register_candidate_class,
+    unregister_candidate,
+)
 
 __all__ = [
     "CANDIDATES",
@@ -30,87 +28,11 @@ __all__ = [
     "candidate",
     "own_columns",
     "register_candidate",
+    "register_candidate_class",
     "unregister_candidate",
 ]
 
-_REGISTERED: dict[str, Candidate] = {}
-
-
-class _Candidates(Sequence[Candidate]):
-    """The registered candidates in the catalogue's order, as they are when read."""
-
-    def _ordered(self) -> tuple[Candidate, ...]:
-        return tuple(_REGISTERED[name] for name in CATALOGUE if name in _REGISTERED)
-
-    @overload
-    def __getitem__(self, index: int) -> Candidate: ...
-
-    @overload
-    def __getitem__(self, index: slice) -> Sequence[Candidate]: ...
-
-    def __getitem__(self, index: int | slice) -> Candidate | Sequence[Candidate]:
-        return self._ordered()[index]
-
-    def __iter__(self) -> Iterator[Candidate]:
-        return iter(self._ordered())
-
-    def __len__(self) -> int:
-        return len(self._ordered())
-
-    def __repr__(self) -> str:
-        return f"CANDIDATES({', '.join(c.name for c in self)})"
-
-
-CANDIDATES: Sequence[Candidate] = _Candidates()
-"""Every registered candidate, in the catalogue's order (read at call time)."""
-
-
-def candidate(name: str) -> Candidate:
-    """The registered candidate of effect ``name``.
-
-    Raises:
-        EffectError: no candidate models that effect.
-    """
-    try:
-        return _REGISTERED[name]
-    except KeyError:
-        known = ", ".join(c.name for c in CANDIDATES)
-        raise EffectError(f"no candidate for effect {name!r} (known: {known})") from None
-
-
-def register_candidate(item: Candidate) -> Candidate:
-    """Add a candidate made at run time (a plug-in, a test) to the diagnosis.
-
-    Raises:
-        EffectError: its effect is not in the catalogue (register the entry first, with
-            :func:`brake_hil.physics.catalogue.register`), its entry is not the catalogue's,
-            or that effect has a candidate already.
-    """
-    name = item.entry.name
-    if name not in CATALOGUE:
-        raise EffectError(f"candidate {name}: its effect is not in the catalogue")
-    if CATALOGUE[name] != item.entry:
-        raise EffectError(f"candidate {name}: its entry is not the catalogue's")
-    if name in _REGISTERED:
-        raise EffectError(f"effect {name} has a candidate already")
-    _REGISTERED[name] = item
-    return item
-
-
-def unregister_candidate(name: str) -> None:
-    """Remove the candidate of effect ``name`` (nothing when absent)."""
-    _REGISTERED.pop(name, None)
-
-
-for _item in (
-    SealStickSlip(),
-    SealGrooveAsymmetry(),
-    EntrainedAir(),
-    OrificeFlow(),
-    HoseCompliance(),
-    BoreFriction(),
-    EccentricLoad(),
-    ThermalDrift(),
-    SensorDelay(),
-):
-    register_candidate(_item)
+for _module in pkgutil.iter_modules(__path__):
+    if not _module.name.startswith("_"):
+        importlib.import_module(f"{__name__}.{_module.name}")  # its candidate registers itself
+del _module

@@ -12,9 +12,9 @@ in turn.
 The candidates are deliberately simpler than the virtual rig's physics (an ideal Jenkins
 slider, not a rate-dependent bristle law; one lumped hose stage, not a ladder; isothermal,
 not polytropic air; a pure ``Q |Q|`` orifice; one heating time, not two heat paths and a
-viscosity law), so the
-benchmark does not fit the very equations that made its data. (The hose stage's wall creeps
-as family b's hose node does: for the hose, family b is no longer an independent check.)
+viscosity law), so the benchmark does not fit the very equations that made its data. (The
+hose stage's wall creeps as family b's hose node does, so for the hose family b is not an
+independent check.)
 """
 
 from __future__ import annotations

@@ -10,6 +10,7 @@ from brake_hil.diagnosis.candidates.base import (
     Context,
     Draft,
 )
+from brake_hil.diagnosis.candidates.registry import register_candidate_class
 from brake_hil.diagnosis.engine import FrictionElement
 from brake_hil.physics.catalogue import CATALOGUE
 from brake_hil.types import FloatArray
@@ -18,6 +19,7 @@ CONTACT_STIFFNESS = 5.0e7
 """Tangential stiffness of the piston-bore contact before it slides (N/m)."""
 
 
+@register_candidate_class
 class BoreFriction(Candidate):
     """Bore friction: the cocked caliper presses the pistons against their bores.
 

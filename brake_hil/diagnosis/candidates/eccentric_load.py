@@ -12,6 +12,7 @@ from brake_hil.diagnosis.candidates.base import (
     Context,
     Draft,
 )
+from brake_hil.diagnosis.candidates.registry import register_candidate_class
 from brake_hil.diagnosis.engine import CALIPER_FORCE, State, Step, Term
 from brake_hil.physics.catalogue import CATALOGUE
 from brake_hil.types import FloatArray
@@ -47,6 +48,7 @@ class _LoadShare(Step):
         explicit[:, CALIPER_FORCE] += -self.bore_area * p_b * u * (self.slope + self.curvature * u)
 
 
+@register_candidate_class
 class EccentricLoad(Candidate):
     """Eccentric load: the caliper sees a share ``s`` of ``A_eb p_b``, not all of it.
 

@@ -10,6 +10,7 @@ from brake_hil.diagnosis.candidates.base import (
     Context,
     Draft,
 )
+from brake_hil.diagnosis.candidates.registry import register_candidate_class
 from brake_hil.diagnosis.engine import Coupling, Entry, Term
 from brake_hil.physics.catalogue import CATALOGUE
 from brake_hil.types import FloatArray
@@ -32,6 +33,7 @@ class IsothermalAir(Term):
         coupling.extra_compliance += float(self.volume[row]) * ATMOSPHERE / absolute**2
 
 
+@register_candidate_class
 class EntrainedAir(Candidate):
     """Entrained air: a bulk modulus that rises with pressure.
 

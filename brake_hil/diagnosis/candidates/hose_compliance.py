@@ -14,6 +14,7 @@ from brake_hil.diagnosis.candidates.base import (
     Rival,
 )
 from brake_hil.diagnosis.candidates.late_input import LateInput
+from brake_hil.diagnosis.candidates.registry import register_candidate_class
 from brake_hil.diagnosis.engine import Coupling, Entry, Term
 from brake_hil.physics.catalogue import CATALOGUE
 from brake_hil.types import FloatArray
@@ -38,6 +39,7 @@ class HoseNode(Term):
         coupling.hose_creep_time = float(self.creep_time[row])
 
 
+@register_candidate_class
 class HoseCompliance(Candidate):
     """Hose compliance: the line stores fluid as its walls swell.
 
@@ -53,9 +55,8 @@ class HoseCompliance(Candidate):
     The wall's swell does not change with pressure (SAE J1401 rates a brake hose by one
     volumetric expansion per pressure and length), unlike the bore's compliance, which the air
     sets (eq. 18): so ``C_h`` is a multiple of one fixed compliance, the rig file's ``C_b``
-    at 0.9 MPa, not of each segment's ``C_b``. (Scaled with each segment's ``C_b``, the node
-    left family b's 22 hoses of seed 1701 1.6-19 times the noise, median 3.5; fixed, 1.3-7.7,
-    median 2.5; family a's 12 tried 2.2 -> 2.15.)
+    at 0.9 MPa, not of each segment's ``C_b``, which fits the hoses of both families more
+    closely (evidence in docs/diagnosis.md).
     """
 
     entry = CATALOGUE["hose_compliance"]
@@ -77,8 +78,8 @@ class HoseCompliance(Candidate):
         """``p_i`` acquired late through its filter (every output leading alike).
 
         With the creeping wall, a hose plus a calibration of less lag of its own mimics a late
-        ``p_i``: on seed 901, 3 of family a's 8 late ``p_i`` and 2 of family b's 6 were named
-        a hose (fitted creep ratio 0.9-5, at its bound on most; retardation 42-94 ms).
+        ``p_i`` (a creep ratio at its bound, a retardation of tens of ms; evidence in
+        docs/diagnosis.md).
         """
         return (LateInput(),)
 

@@ -4,7 +4,7 @@ Not a library effect of its own (``sensor_delay`` names a late ``p_i`` as every 
 alike) and never named. The physics checks fit it, with the calibration refitted, as the rival
 of a hose (``HoseCompliance.rivals``): a hose's compliance adds lag between ``p_i`` and every
 output, and a refitted calibration with less lag of its own (less air, a freer valve) plus a
-creeping hose can mimic the lead of a late ``p_i``. When every output led alike explains the
+creeping hose can mimic a late ``p_i``'s lead. When every output led alike explains the
 misfit nearly as well, the hose is not told from a late input.
 """
 
@@ -48,15 +48,13 @@ class LateInput(Rival):
         CandidateParameter("input_advance", "s", 0.0, LONGEST_ADVANCE, 0.002),
         CandidateParameter("input_filter_time", "s", 0.0, 0.01, 0.0005),
     )
-    lookahead = LONGEST_ADVANCE + 1e-3  # and a sample for the lead's slope
+    lookahead = LONGEST_ADVANCE + 1e-3  # and a sample for the leading slope
     told_apart = 1.5
     """A hose must leave this many times less held-out error than a late ``p_i`` (the bar a
-    candidate clears over a baseline clearly above the noise, ``CLEAR_ACCEPT_RATIO``). Measured
-    2026-11-27 with the run read past its window (``Candidate.lookahead``), seeds 1501-1701:
-    fitted in the hose's place on the 36 true late ``p_i`` of both families, a late ``p_i``
-    left 0.00-1.11 times the hose's error; on the true hoses where it holds (a lead of 0.5 ms
-    or more: 4 of 144), 1.26, 1.68, 6.7 and 15. (2, before the lookahead: a late ``p_i`` then
-    left the held final value of every window unexplained, up to 20 times the noise.)"""
+    candidate clears over a baseline clearly above the noise, ``CLEAR_ACCEPT_RATIO``): fitted in
+    a hose's place, a true late ``p_i`` leaves about the hose's error or less, and on the few
+    true hoses where it holds at all a late ``p_i`` leaves more than this (evidence in
+    docs/diagnosis.md)."""
     why = "a hose adds lag to every output, it cannot make them lead"
     unlike = "too short a lead for a late input"
 

@@ -12,6 +12,7 @@ from brake_hil.diagnosis.candidates.base import (
     Context,
     Draft,
 )
+from brake_hil.diagnosis.candidates.registry import register_candidate_class
 from brake_hil.diagnosis.engine import LINE_DROP, MidStep, State, Step, Term
 from brake_hil.physics.catalogue import CATALOGUE
 from brake_hil.types import FloatArray
@@ -39,6 +40,7 @@ class _QuadraticDropStep(Step):
         explicit[:, LINE_DROP] += self.coefficient * q * np.abs(q)
 
 
+@register_candidate_class
 class OrificeFlow(Candidate):
     """Orifice flow: the needle valve drops pressure as ``K Q |Q|``, not ``R_v Q``.
 

@@ -18,11 +18,9 @@ from brake_hil.topics import OUTPUT_CHANNELS
 from brake_hil.types import FloatArray
 
 LIGHT_DAMPING = 0.4
-"""A mode damped less than this is a resonance, not a filter. Measured 2026-11-26 on seed 901
-(the mode fitted in a delay's place, the calibration refitted): family b's seven pressure taps
-came out at 0.06-0.20 and 18-43 Hz (each within 0.02 and 1 Hz of its drawn values), reading
-1.5-15 times better than delayed; fifteen true delays of both families at 0.55-0.88 (a
-delay's nearest mode is a Butterworth filter's, 0.71), reading 0.7-1.2 times as well."""
+"""A mode damped less than this is a resonance, not a filter: fitted in a delay's place,
+resonant pressure tappings come out at damping ratios of 0.06-0.20, true delays at 0.55-0.88
+(a delay's nearest mode is a Butterworth filter's, 0.71) (evidence in docs/diagnosis.md)."""
 
 READING = EffectEntry(
     name="resonant_reading",

@@ -12,6 +12,7 @@ from brake_hil.diagnosis.candidates.base import (
     Context,
     Draft,
 )
+from brake_hil.diagnosis.candidates.registry import register_candidate_class
 from brake_hil.diagnosis.engine import RELATIVE_FORCE, Coupling, Entry, State, Step, Term
 from brake_hil.physics.catalogue import CATALOGUE
 from brake_hil.types import FloatArray, IndexArray
@@ -68,6 +69,7 @@ class _Relaxation(Step):
         self.side = np.where(seal >= self.relaxed, APPLY, RELEASE)
 
 
+@register_candidate_class
 class SealGrooveAsymmetry(Candidate):
     """Seal groove asymmetry: the seal pushes back harder on release than it yields on apply.
 
@@ -82,10 +84,9 @@ class SealGrooveAsymmetry(Candidate):
 
     entry = CATALOGUE["seal_groove_asymmetry"]
     lead_in = 3.0
-    """The seat creeps over a second or so: a run started at equilibrium 0.8 s before its
-    window carried its start into the window, and the fit made the creep faster to forget it
-    (seed 1601, family a: relaxation 0.43-0.53 s fitted for 1.0 s drawn, leaving 3.5-20 times
-    the noise); 3 s of history recover 1.0 s and leave 1.4-2.3 times."""
+    """s of history before the window: the seat creeps over a second or so, so a shorter run
+    carries its start into the window and the fit makes the creep faster to forget it; 3 s
+    recover the creep time (evidence in docs/diagnosis.md)."""
     parameters = (
         CandidateParameter("stiffness_asymmetry", "-", -0.9, 0.9, 0.2),
         CandidateParameter("relaxation_time", "s", 0.05, 30.0, 1.0, logarithmic=True),

@@ -10,11 +10,13 @@ from brake_hil.diagnosis.candidates.base import (
     Context,
     Draft,
 )
+from brake_hil.diagnosis.candidates.registry import register_candidate_class
 from brake_hil.diagnosis.engine import FrictionElement
 from brake_hil.physics.catalogue import CATALOGUE
 from brake_hil.types import FloatArray
 
 
+@register_candidate_class
 class SealStickSlip(Candidate):
     """Stick-slip seal friction in place of the equivalent viscous ``k_eh``, ``c_eh``.
 

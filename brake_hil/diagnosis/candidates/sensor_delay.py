@@ -11,6 +11,7 @@ from brake_hil.diagnosis.candidates.base import (
     Draft,
     Rival,
 )
+from brake_hil.diagnosis.candidates.registry import register_candidate_class
 from brake_hil.diagnosis.candidates.resonant_reading import ResonantReading
 from brake_hil.diagnosis.engine import ChannelDelay
 from brake_hil.physics.catalogue import CATALOGUE
@@ -20,12 +21,9 @@ SKEW_THRESHOLD = 0.5e-3
 """Delay difference (s) that counts as acquisition skew."""
 SEGMENT_SKEW_SHARE = 0.3
 """A skewed channel's skew may differ between the pressure segments by at most this share of
-its largest: a delay is a time, the same at every amplitude. (Measured 2026-11-26 on 194
-virtual-rig recordings of both families: the skews of the named sensor delays that were
-right differed 0.01-0.25 of that, the five delays named on a load cell's hysteresis or a
-creeping hose 0.34-0.71, falling with amplitude as a loop of fixed width read as a lag does.
-Two first versions also judged skews under ``SKEW_THRESHOLD``, then the common delay of a
-late ``p_i``; each set aside a true late ``p_i`` on a fresh seed.)"""
+its largest: a delay is a time, the same at every amplitude, while a load cell's hysteresis
+or a creeping hose read as a lag falls with amplitude, as a loop of fixed width does (evidence
+in docs/diagnosis.md)."""
 CHANNELS = ("p_b", "F_k", "x_c")
 LATE_INPUT_SKEW_SHARE = 0.5
 """A skew under this share of a lead common to every output is a late ``p_i``'s filter passed
@@ -40,6 +38,7 @@ def _skews(theta: FloatArray) -> FloatArray:
     return np.asarray(delays - np.median(delays), dtype=float)
 
 
+@register_candidate_class
 class SensorDelay(Candidate):
     """Sensor delay: each channel is acquired late by its own delay.
 
@@ -80,8 +79,8 @@ class SensorDelay(Candidate):
         is the delay common to every output (a late ``p_i``): fitted per segment it trades
         with the calibration's own phase (a true late ``p_i`` came out 0.11, 0.84, 0.95 ms).
         Nor, when every output leads in every segment (a late ``p_i``), a skew under half that
-        common lead: the outputs' own dynamics pass its filter differently (seed 1701, family
-        b, case 137: every output 2.7-3.5 ms early, ``p_b`` 0.72, 0.51, 0.37 ms less so).
+        common lead: the outputs' own dynamics pass its filter differently (every output a few
+        ms early, ``p_b`` some tenths of a ms less so).
         """
         delays = np.asarray(per_segment, dtype=float)[:, :3]
         if delays.shape[0] < 2:

@@ -13,6 +13,7 @@ from brake_hil.diagnosis.candidates.base import (
     Context,
     Draft,
 )
+from brake_hil.diagnosis.candidates.registry import register_candidate_class
 from brake_hil.diagnosis.engine import Coupling, Entry, Term
 from brake_hil.physics.catalogue import CATALOGUE
 from brake_hil.types import FloatArray
@@ -59,6 +60,7 @@ def heated_time(time: float, reference: float, heating_time: float) -> float:
     )
 
 
+@register_candidate_class
 class ThermalDrift(Candidate):
     """Thermal drift: viscosity and seal modulus change as the rig warms up.
 
@@ -70,10 +72,9 @@ class ThermalDrift(Candidate):
     the few tens of kelvin of a run each coefficient is taken linear in temperature: one
     relative rate at the start for the line resistance and one for the seal's ``k_eh`` and
     ``c_eh``, one heating time ``tau``, zero change in the middle of the training data (where
-    the calibration holds on average). A linear drift in time (before 2026-11-27) left 26-34
-    times the noise on strong drifts of seed 1601 (both families: their heating times are
-    4-20 s); this form 3.5-9.8. The rates at the start reach 0.1 1/s on a fast heating (a
-    viscosity falling by 64 % with a 7 s heating time).
+    the calibration holds on average); a drift linear in time leaves several times more of a
+    strong drift unexplained (evidence in docs/diagnosis.md). The rates at the start reach
+    0.1 1/s on a fast heating (a viscosity falling by 64 % with a 7 s heating time).
     """
 
     entry = CATALOGUE["thermal_drift"]

@@ -6,29 +6,15 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 from brake_hil.physics import catalogue
-from brake_hil.virtual_rig.effects import _math as fm
+from brake_hil.virtual_rig import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
-from brake_hil.virtual_rig.effects.seal_stick_slip import smooth_speed
-from brake_hil.virtual_rig.laws import LtiPlant, Signal, State, TruthLaw
-
-_DEFLECTION_SMOOTHING = 1.0e-7
-"""Caliper displacement (m) below which ``|x_c|`` is rounded off."""
-
-
-def cocking_normal_force(
-    bore_area: float, guide_length: float, bore_pressure: Signal, caliper_displacement: Signal
-) -> Signal:
-    """Contact force from cocking ``4 A_eb p_b |x_c| / l_g`` (N), seed eq. 8 on ``l_g``.
-
-    ``|x_c|`` smoothed over ``_DEFLECTION_SMOOTHING`` (m); pressure below gauge zero gives none.
-    """
-    tilt = fm.sqrt(caliper_displacement**2 + _DEFLECTION_SMOOTHING**2)
-    force: Signal = 4.0 * bore_area * fm.maximum(bore_pressure, 0.0) * tilt / guide_length
-    return force
+from brake_hil.virtual_rig.effects.registry import register_effect
+from brake_hil.virtual_rig.laws import LtiPlant, Signal, State
+from brake_hil.virtual_rig.mechanics import CockedContact, smooth_speed
 
 
 @dataclass(frozen=True)
-class DahlBoreFriction(TruthLaw):
+class DahlBoreFriction(CockedContact):
     """Piston-bore friction bound to a rig (SI): the host's bore-force port, state ``w``."""
 
     static_coefficient: float  # mu_s, -
@@ -37,12 +23,6 @@ class DahlBoreFriction(TruthLaw):
     presliding_displacement: float  # delta, m
     guide_length: float  # l_g, m
     bore_area: float  # A_eb, m^2
-
-    def normal_force(self, bore_pressure: Signal, caliper_displacement: Signal) -> Signal:
-        """Contact force from cocking (N): :func:`cocking_normal_force`."""
-        return cocking_normal_force(
-            self.bore_area, self.guide_length, bore_pressure, caliper_displacement
-        )
 
     def coefficient(self, velocity: Signal) -> Signal:
         """Stribeck friction coefficient ``mu_k + (mu_s - mu_k) exp(-(v/v_S)^2)`` (-)."""
@@ -94,6 +74,7 @@ class DahlBoreFriction(TruthLaw):
         return force, [self.state_rate(w, velocity)]
 
 
+@register_effect
 @dataclass(frozen=True)
 class BoreFriction(Effect):
     """Piston-bore friction from caliper cocking.

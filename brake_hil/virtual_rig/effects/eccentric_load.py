@@ -5,8 +5,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from brake_hil.physics import catalogue
-from brake_hil.virtual_rig.effects import _math as fm
+from brake_hil.virtual_rig import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
+from brake_hil.virtual_rig.effects.registry import register_effect
 from brake_hil.virtual_rig.laws import LtiPlant, Signal, TruthLaw
 
 
@@ -34,6 +35,7 @@ class LoadDependentShare(TruthLaw):
         return share
 
 
+@register_effect
 @dataclass(frozen=True)
 class EccentricLoad(Effect):
     """Eccentric loading of the cut caliper.
@@ -64,9 +66,9 @@ class EccentricLoad(Effect):
         Parameter("seating_force", "N", 100.0, 1.0e5, "F_0 of the seating law"),
     )
     diagnosis_model = (
-        "a caliper force share (A_eb replaced by s A_eb, eq. 22c) quadratic in p_b about 1 MPa "
-        "(since 2026-11-26; linear before); the simulator's share seats with load "
-        "hyperbolically, which the quadratic follows over the recorded pressures only"
+        "a caliper force share (A_eb replaced by s A_eb, eq. 22c) quadratic in p_b about "
+        "1 MPa; the simulator's share seats with load hyperbolically, which the quadratic "
+        "follows over the recorded pressures only"
     )
 
     def law(self, plant: LtiPlant) -> LoadDependentShare:

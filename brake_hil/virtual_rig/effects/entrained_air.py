@@ -5,8 +5,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from brake_hil.physics import catalogue
-from brake_hil.virtual_rig.effects import _math as fm
+from brake_hil.virtual_rig import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
+from brake_hil.virtual_rig.effects.registry import register_effect
 from brake_hil.virtual_rig.laws import LtiPlant, Signal, TruthLaw
 
 ATMOSPHERIC_PRESSURE = 101_325.0
@@ -41,6 +42,7 @@ class PolytropicAir(TruthLaw):
         return compliance
 
 
+@register_effect
 @dataclass(frozen=True)
 class EntrainedAir(Effect):
     """Entrained air: undissolved air bubbles in the brake fluid.

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 import math
 
@@ -10,7 +10,8 @@ import numpy as np
 
 from brake_hil.physics import catalogue
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, EffectError, Parameter
-from brake_hil.virtual_rig.laws import LineFlow, LtiPlant, Signal, State, TruthLaw
+from brake_hil.virtual_rig.effects.registry import register_effect
+from brake_hil.virtual_rig.laws import LineFlow, LinePorts, LtiPlant, Signal, State, TruthLaw
 
 
 @dataclass(frozen=True)
@@ -58,35 +59,25 @@ class HoseLadder(TruthLaw):
         """At rest every node is at the bore pressure."""
         return tuple(equilibrium["p_b"] for _ in range(self.segment_count))
 
-    def line_flow(
-        self,
-        master_pressure: Signal,
-        bore_pressure: Signal,
-        flow: Signal,
-        upstream_drop: Signal,
-        hose_resistance: Signal,
-        inertance: float,
-        fluid_compliance: Signal,
-        extra_compliance: Callable[[Signal], Signal] | None,
-        states: Sequence[Signal],
-    ) -> LineFlow:
+    def line_flow(self, line: LinePorts, states: Sequence[Signal]) -> LineFlow:
         """Pipe and valve into node 0, then the hose segments node to node into the bore."""
         count = self.segment_count
-        segment_resistance = hose_resistance / count
-        fluid, extra, nodes = fluid_compliance, extra_compliance, states
-        flow_rate = (master_pressure - nodes[0] - upstream_drop) / inertance
-        inflow = flow
+        segment_resistance = line.hose_resistance / count
+        nodes = states
+        flow_rate = (line.master_pressure - nodes[0] - line.upstream_drop) / line.inertance
+        inflow = line.flow
         rates: list[Signal] = []
         for node in range(count):
-            downstream = nodes[node + 1] if node + 1 < count else bore_pressure
+            downstream = nodes[node + 1] if node + 1 < count else line.bore_pressure
             outflow = (nodes[node] - downstream) / segment_resistance
-            node_fluid = fluid if extra is None else fluid + extra(nodes[node])
+            node_fluid = line.compliance_at(nodes[node])
             rates.append((inflow - outflow) / self.node_compliance(node, node_fluid))
             inflow = outflow
-        bore_fluid = fluid if extra is None else fluid + extra(bore_pressure)
+        bore_fluid = line.compliance_at(line.bore_pressure)
         return flow_rate, rates, inflow, self.bore_end_compliance(bore_fluid)
 
 
+@register_effect
 @dataclass(frozen=True)
 class HoseCompliance(Effect):
     """Hose and pipe compliance between the master cylinder and the bore.

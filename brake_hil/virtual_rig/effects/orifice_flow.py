@@ -8,9 +8,11 @@ import math
 import numpy as np
 
 from brake_hil.physics import catalogue
-from brake_hil.virtual_rig.effects import _math as fm
+from brake_hil.virtual_rig import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
-from brake_hil.virtual_rig.laws import LtiPlant, Signal, TruthLaw
+from brake_hil.virtual_rig.effects.registry import register_effect
+from brake_hil.virtual_rig.laws import LtiPlant, Signal
+from brake_hil.virtual_rig.mechanics import SharedValve
 
 _QUADRATURE_POINTS = 512
 
@@ -23,7 +25,7 @@ def _square_gain(ratio: Signal) -> Signal:
 
 
 @dataclass(frozen=True)
-class OrificeValve(TruthLaw):
+class OrificeValve(SharedValve):
     """Needle valve bound to a rig: linear share plus a Reynolds-dependent orifice.
 
     The host's valve-drop port.
@@ -40,23 +42,9 @@ class OrificeValve(TruthLaw):
         drop: Signal = self.flow_coefficient * transition * flow * _square_gain(ratio)
         return drop
 
-    def valve_drop(
-        self,
-        flow: Signal,
-        linear_resistance: float,
-        viscosity_factor: Signal,
-        linear_factor: Signal,
-    ) -> Signal:
-        """Valve drop (Pa): ``(1 - s) R_v Q + s dp_orifice(Q)``.
-
-        ``R_v`` is the rig's linearised resistance (Pa s/m^3).
-        """
-        drop: Signal = (
-            1.0 - self.share
-        ) * linear_resistance * linear_factor * flow + self.share * self.orifice_drop(
-            flow, viscosity_factor
-        )
-        return drop
+    def own_drop(self, flow: Signal, viscosity_factor: Signal) -> Signal:
+        """The valve's own drop ``dp_orifice(Q)`` (Pa): :meth:`orifice_drop`."""
+        return self.orifice_drop(flow, viscosity_factor)
 
 
 def describing_function_resistance(valve: OrificeValve, amplitude: float) -> float:
@@ -71,6 +59,7 @@ def describing_function_resistance(valve: OrificeValve, amplitude: float) -> flo
     return float(2.0 / amplitude * np.mean(drop * np.sin(theta)))
 
 
+@register_effect
 @dataclass(frozen=True)
 class OrificeFlow(Effect):
     """Turbulent orifice flow in the needle valve.

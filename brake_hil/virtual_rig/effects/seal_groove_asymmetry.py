@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 from brake_hil.physics import catalogue
-from brake_hil.virtual_rig.effects import _math as fm
+from brake_hil.virtual_rig import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
-from brake_hil.virtual_rig.laws import LtiPlant, Signal, State, TruthLaw
+from brake_hil.virtual_rig.effects.registry import register_effect
+from brake_hil.virtual_rig.laws import LtiPlant, Signal
+from brake_hil.virtual_rig.mechanics import RelaxingGroove
 
 SWITCH_WIDTH = 1.0e-6
 """Width (m) of the spring's smooth switch between its apply and release stiffness."""
@@ -25,7 +26,7 @@ def asymmetric_spring(deflection: Signal, asymmetry: float, width: float) -> Sig
 
 
 @dataclass(frozen=True)
-class GrooveAsymmetry(TruthLaw):
+class GrooveAsymmetry(RelaxingGroove):
     """The groove's asymmetry bound to a strength.
 
     The host's spring-deflection port (state ``x_r``, the seal's relaxed position) and the seal's
@@ -36,28 +37,17 @@ class GrooveAsymmetry(TruthLaw):
     relaxation_time: float  # tau_r, s
     width: float = SWITCH_WIDTH  # w, m
 
-    def states(self) -> tuple[State, ...]:
-        """The seal's relaxed position ``x_r`` (m)."""
-        return (State("x_r", 1e-5),)
+    def groove_deflection(self, deflection: Signal) -> Signal:
+        """``e - a e tanh(e / w)`` (m) at ``e = x_s - x_r``."""
+        return asymmetric_spring(deflection, self.asymmetry, self.width)
 
-    def initial_state(self, equilibrium: Mapping[str, float]) -> tuple[float, ...]:
-        """At rest the seal is relaxed where it sits."""
-        return (equilibrium["seal_displacement"],)
-
-    def seal_asymmetry(self) -> float:
-        """``a``, for a frictional seal's slip threshold."""
-        return self.asymmetry
-
-    def spring_deflection(
-        self, seal_displacement: Signal, states: Sequence[Signal]
-    ) -> tuple[Signal, list[Signal]]:
-        """``x_r + e - a e tanh(e / w)`` (m) with ``e = x_s - x_r``, and ``x_r' = e / tau_r``."""
-        relaxed = states[0]
-        deflection = seal_displacement - relaxed
-        effective = relaxed + asymmetric_spring(deflection, self.asymmetry, self.width)
-        return effective, [deflection / self.relaxation_time]
+    def relaxation_rate(self, deflection: Signal) -> Signal:
+        """``x_r' = e / tau_r`` (m/s)."""
+        rate: Signal = deflection / self.relaxation_time
+        return rate
 
 
+@register_effect
 @dataclass(frozen=True)
 class SealGrooveAsymmetry(Effect):
     """Seal-groove asymmetry: the seal's stiffness and slip threshold differ on apply and release.

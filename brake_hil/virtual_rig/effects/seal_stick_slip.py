@@ -2,31 +2,26 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 import math
 
-import numpy as np
-
 from brake_hil.physics import catalogue
 from brake_hil.physics.parameters import seal_properties
-from brake_hil.virtual_rig.effects import _math as fm
+from brake_hil.virtual_rig import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
-from brake_hil.virtual_rig.laws import LtiPlant, Signal, State, TruthLaw
-
-SPEED_SMOOTHING = 2.0e-5
-"""Velocity (m/s) below which ``|v|`` is rounded off, ``sqrt(v^2 + e^2) - e``."""
-ASYMMETRY_WIDTH_SHARE = 0.25
-"""Width of the apply/release switch of an asymmetric seal, as a share of ``F_S / sigma_0``."""
-
-
-def smooth_speed(velocity: Signal) -> Signal:
-    """``|v|`` rounded off below :data:`SPEED_SMOOTHING` (m/s), so the law is differentiable."""
-    return fm.sqrt(velocity**2 + SPEED_SMOOTHING**2) - SPEED_SMOOTHING
+from brake_hil.virtual_rig.effects.registry import register_effect
+from brake_hil.virtual_rig.laws import LtiPlant, SealPorts, Signal
+from brake_hil.virtual_rig.mechanics import (
+    ASYMMETRY_WIDTH_SHARE,
+    FrictionalSeal,
+    asymmetric_limit,
+    smooth_speed,
+    structural_damping,
+)
 
 
 @dataclass(frozen=True)
-class LuGreSeal(TruthLaw):
+class LuGreSeal(FrictionalSeal):
     """LuGre friction law of both seals together, bound to a rig (SI).
 
     The host's seal-force port (state ``z``, the seals' shear deflection) and structural damping.
@@ -56,7 +51,7 @@ class LuGreSeal(TruthLaw):
         )
         if asymmetry:
             width = ASYMMETRY_WIDTH_SHARE * self.static_force / self.bristle_stiffness
-            slip = slip * (1.0 - asymmetry * fm.tanh(deflection / width))
+            slip = asymmetric_limit(slip, asymmetry, deflection, width)
         return slip
 
     def deflection_rate(
@@ -81,41 +76,20 @@ class LuGreSeal(TruthLaw):
             + self.viscous_friction * viscosity_factor * velocity
         )
 
-    def states(self) -> tuple[State, ...]:
-        """The seals' shear deflection ``z`` (m)."""
-        return (State("z", 1e-5),)
+    def rest_limit(self) -> float:
+        """At rest the seals are sheared below their slip limit (m)."""
+        return 0.99 * self.coulomb_force / self.bristle_stiffness
 
-    def initial_state(self, equilibrium: Mapping[str, float]) -> tuple[float, ...]:
-        """At rest the seals are sheared by the seal displacement, below their slip limit."""
-        limit = 0.99 * self.coulomb_force / self.bristle_stiffness
-        return (float(np.clip(equilibrium["seal_displacement"], -limit, limit)),)
-
-    def spring_share(self) -> float:
-        """What the equivalent spring and damper keep: ``1 - share``."""
-        return 1.0 - self.share
-
-    def seal_force(
-        self,
-        spring_force: Signal,
-        velocity: Signal,
-        asymmetry: float,
-        modulus_factor: Signal,
-        viscosity_factor: Signal,
-        states: Sequence[Signal],
-    ) -> tuple[Signal, list[Signal]]:
-        """``(1 - share) F_spring + share F_LuGre`` (N), and ``z'`` (m/s)."""
-        z = states[0]
-        slip = self.slip_force(velocity, z, asymmetry, modulus_factor)
-        z_rate = self.deflection_rate(z, velocity, slip, modulus_factor)
-        friction = self.force(z, z_rate, velocity, modulus_factor, viscosity_factor)
-        force = (1.0 - self.share) * spring_force + self.share * friction
-        return force, [z_rate]
-
-    def structural_damping(self) -> tuple[float, float]:
-        """Caliper to ground and piston to block (N s/m)."""
-        return self.caliper_damping, self.block_damping
+    def own_force(self, deflection: Signal, seal: SealPorts) -> tuple[Signal, Signal]:
+        """The LuGre force (N) and ``z'`` (m/s)."""
+        velocity, modulus = seal.velocity, seal.modulus_factor
+        slip = self.slip_force(velocity, deflection, seal.asymmetry, modulus)
+        z_rate = self.deflection_rate(deflection, velocity, slip, modulus)
+        friction = self.force(deflection, z_rate, velocity, modulus, seal.viscosity_factor)
+        return friction, z_rate
 
 
+@register_effect
 @dataclass(frozen=True)
 class SealStickSlip(Effect):
     """Seal stick-slip: Coulomb friction at the piston-seal interface.
@@ -172,7 +146,9 @@ class SealStickSlip(Effect):
         stiffness = 2.0 * seal.static_stiffness
         static = 2.0 * seal.friction_threshold
         params = plant.params
-        ratio = 2.0 * self.strength * self.structural_damping_ratio
+        caliper_damping, block_damping = structural_damping(
+            params, 2.0 * self.strength * self.structural_damping_ratio
+        )
         return LuGreSeal(
             bristle_stiffness=stiffness,
             static_force=static,
@@ -183,6 +159,6 @@ class SealStickSlip(Effect):
             * math.sqrt(stiffness * plant.params.piston_mass),
             viscous_friction=self.viscous_friction,
             share=self.strength,
-            caliper_damping=ratio * math.sqrt(params.caliper_stiffness * params.caliper_mass),
-            block_damping=ratio * math.sqrt(params.block_stiffness * params.piston_mass),
+            caliper_damping=caliper_damping,
+            block_damping=block_damping,
         )

@@ -11,6 +11,7 @@ from scipy.signal import lfilter
 from brake_hil.physics import catalogue
 from brake_hil.types import FloatArray
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
+from brake_hil.virtual_rig.effects.registry import register_effect
 from brake_hil.virtual_rig.laws import LtiPlant, TruthLaw
 
 CHANNELS = ("p_i", "p_b", "F_k", "x_c")
@@ -60,6 +61,7 @@ class ChannelSkew(TruthLaw):
         return self.apply(time, values) if channel == self.channel else values
 
 
+@register_effect
 @dataclass(frozen=True)
 class SensorDelay(Effect):
     """Sensor delay: one channel reaches the acquisition later than the others.

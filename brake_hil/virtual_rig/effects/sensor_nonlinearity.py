@@ -10,6 +10,7 @@ from brake_hil.physics import catalogue
 from brake_hil.physics.measurement import SENSORS
 from brake_hil.types import FloatArray
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
+from brake_hil.virtual_rig.effects.registry import register_effect
 from brake_hil.virtual_rig.laws import LtiPlant, TruthLaw
 
 NONLINEAR_CHANNELS = ("F_k",)
@@ -39,6 +40,7 @@ class QuadraticGain(TruthLaw):
         return self.apply(time, values) if channel == self.channel else values
 
 
+@register_effect
 @dataclass(frozen=True)
 class SensorNonlinearity(Effect):
     """Sensor nonlinearity: load cells whose sensitivity changes with their reading.

@@ -6,9 +6,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from brake_hil.physics import catalogue
-from brake_hil.virtual_rig.effects import _math as fm
+from brake_hil.virtual_rig import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
+from brake_hil.virtual_rig.effects.registry import register_effect
 from brake_hil.virtual_rig.laws import LtiPlant, Signal, TruthLaw
+from brake_hil.virtual_rig.mechanics import heated_temperature
 
 _LOWEST_MODULUS_FACTOR = 0.2
 
@@ -29,9 +31,9 @@ class HeatingLaw(TruthLaw):
 
     def temperature(self, time: Signal) -> Signal:
         """``T(t) = T_0 + dT (1 - exp(-t / tau_th))`` (K), ``t`` in s from the start."""
-        rise = -fm.expm1(-fm.maximum(time, 0.0) / self.time_constant)
-        temperature: Signal = self.ambient_temperature + self.temperature_rise * rise
-        return temperature
+        return heated_temperature(
+            time, self.ambient_temperature, self.temperature_rise, self.time_constant
+        )
 
     def viscosity_factor(self, time: Signal) -> Signal:
         """``mu(T) / mu(T_0) = exp(B (1/T - 1/T_0))`` (Andrade)."""
@@ -67,6 +69,7 @@ class HeatingLaw(TruthLaw):
         return {"temperature": self.temperature(time)}
 
 
+@register_effect
 @dataclass(frozen=True)
 class ThermalDrift(Effect):
     """Thermal drift: repeated pulsing warms the fluid and the seals during a recording.

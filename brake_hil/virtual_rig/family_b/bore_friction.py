@@ -7,17 +7,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from brake_hil.virtual_rig.effects import _math as fm
+from brake_hil.virtual_rig import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
-from brake_hil.virtual_rig.effects.bore_friction import cocking_normal_force
-from brake_hil.virtual_rig.family_b.base import FamilyBEffect
-from brake_hil.virtual_rig.laws import LtiPlant, Signal, TruthLaw
+from brake_hil.virtual_rig.family_b.base import FamilyBEffect, register_effect_b
+from brake_hil.virtual_rig.laws import LtiPlant, Signal
+from brake_hil.virtual_rig.mechanics import CockedContact
 
 __all__ = ["BoreFrictionB", "StribeckBoreFriction"]
 
 
 @dataclass(frozen=True)
-class StribeckBoreFriction(TruthLaw):
+class StribeckBoreFriction(CockedContact):
     """Piston-bore friction bound to a rig (SI): the host's bore-force port, no own states."""
 
     static_coefficient: float  # mu_S, -
@@ -28,12 +28,6 @@ class StribeckBoreFriction(TruthLaw):
     viscous_coefficient: float  # mu_v, s/m, viscous friction per unit normal force
     guide_length: float  # l_g, m
     bore_area: float  # A_eb, m^2
-
-    def normal_force(self, bore_pressure: Signal, caliper_displacement: Signal) -> Signal:
-        """Contact force from cocking (N): family a's, the same contact geometry."""
-        return cocking_normal_force(
-            self.bore_area, self.guide_length, bore_pressure, caliper_displacement
-        )
 
     def coefficient(self, velocity: Signal) -> Signal:
         """``mu(v) tanh(v / v_e) + mu_v v`` (-), ``mu = mu_C + (mu_S - mu_C) exp(-|v/v_S|^d)``."""
@@ -58,6 +52,7 @@ class StribeckBoreFriction(TruthLaw):
         return force, []
 
 
+@register_effect_b
 @dataclass(frozen=True)
 class BoreFrictionB(FamilyBEffect, effect="bore_friction"):
     """Piston-bore friction from caliper cocking (family b): a static Stribeck curve.

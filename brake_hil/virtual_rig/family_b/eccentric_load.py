@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
-from brake_hil.virtual_rig.family_b.base import FamilyBEffect
+from brake_hil.virtual_rig.family_b.base import FamilyBEffect, register_effect_b
 from brake_hil.virtual_rig.laws import LtiPlant, Signal, TruthLaw
 
 __all__ = ["CompressingStackShare", "EccentricLoadB"]
@@ -47,6 +47,7 @@ class CompressingStackShare(TruthLaw):
         return share
 
 
+@register_effect_b
 @dataclass(frozen=True)
 class EccentricLoadB(FamilyBEffect, effect="eccentric_load"):
     """Eccentric loading of the cut caliper (family b): a washer stack compressing to solid.
@@ -79,9 +80,9 @@ class EccentricLoadB(FamilyBEffect, effect="eccentric_load"):
         Parameter("knee_share", "-", 0.01, 0.5, "W / F_s, the knee's width"),
     )
     diagnosis_model = (
-        "a caliper force share (A_eb replaced by s A_eb, eq. 22c) quadratic in p_b about 1 MPa "
-        "(since 2026-11-26; linear before); the simulator's share falls linearly with the force "
-        "and stops at the stack's solid force, a knee no polynomial has"
+        "a caliper force share (A_eb replaced by s A_eb, eq. 22c) quadratic in p_b about "
+        "1 MPa; the simulator's share falls linearly with the force and stops at the stack's "
+        "solid force, a knee no polynomial has"
     )
 
     @classmethod

@@ -6,10 +6,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from brake_hil.virtual_rig.effects import _math as fm
+from brake_hil.virtual_rig import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
 from brake_hil.virtual_rig.effects.entrained_air import ATMOSPHERIC_PRESSURE
-from brake_hil.virtual_rig.family_b.base import FamilyBEffect
+from brake_hil.virtual_rig.family_b.base import FamilyBEffect, register_effect_b
 from brake_hil.virtual_rig.laws import LtiPlant, Signal, TruthLaw
 
 __all__ = ["DissolvingBubbles", "EntrainedAirB"]
@@ -45,6 +45,7 @@ class DissolvingBubbles(TruthLaw):
         return compliance
 
 
+@register_effect_b
 @dataclass(frozen=True)
 class EntrainedAirB(FamilyBEffect, effect="entrained_air"):
     """Entrained air (family b): adiabatic bubbles dissolving completely at a critical pressure.

@@ -2,15 +2,15 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 import math
 
 import numpy as np
 
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
-from brake_hil.virtual_rig.family_b.base import FamilyBEffect
-from brake_hil.virtual_rig.laws import LineFlow, LtiPlant, Signal, State, TruthLaw
+from brake_hil.virtual_rig.family_b.base import FamilyBEffect, register_effect_b
+from brake_hil.virtual_rig.laws import LineFlow, LinePorts, LtiPlant, Signal, State, TruthLaw
 
 __all__ = ["CreepingHose", "HoseComplianceB"]
 
@@ -37,38 +37,26 @@ class CreepingHose(TruthLaw):
         """At rest the node and the wall are at the bore pressure."""
         return (equilibrium["p_b"], equilibrium["p_b"])
 
-    def line_flow(
-        self,
-        master_pressure: Signal,
-        bore_pressure: Signal,
-        flow: Signal,
-        upstream_drop: Signal,
-        hose_resistance: Signal,
-        inertance: float,
-        fluid_compliance: Signal,
-        extra_compliance: Callable[[Signal], Signal] | None,
-        states: Sequence[Signal],
-    ) -> LineFlow:
+    def line_flow(self, line: LinePorts, states: Sequence[Signal]) -> LineFlow:
         """Pipe, valve and half the hose into the node, the other half on into the bore.
 
         ``p_r' = (p_n - p_r) / tau_w``; the node stores ``C p_n' + C_d p_r'``.
         """
         node, retarded = states
-        half = 0.5 * hose_resistance
-        flow_rate = (master_pressure - node - upstream_drop - half * flow) / inertance
-        outflow = (node - bore_pressure) / half
-        fluid = (
-            fluid_compliance
-            if extra_compliance is None
-            else (fluid_compliance + extra_compliance(node))
-        )
+        half = 0.5 * line.hose_resistance
+        flow_rate = (
+            line.master_pressure - node - line.upstream_drop - half * line.flow
+        ) / line.inertance
+        outflow = (node - line.bore_pressure) / half
+        fluid = line.compliance_at(node)
         compliance = self.share * (self.node_volume * fluid + self.instant_wall_compliance)
         creep_rate = (node - retarded) / self.creep_time
         creep_flow = self.share * self.creep_wall_compliance * creep_rate
-        node_rate = (flow - outflow - creep_flow) / compliance
+        node_rate = (line.flow - outflow - creep_flow) / compliance
         return flow_rate, [node_rate, creep_rate], outflow, 0.0
 
 
+@register_effect_b
 @dataclass(frozen=True)
 class HoseComplianceB(FamilyBEffect, effect="hose_compliance"):
     """Hose and pipe compliance (family b): one line node whose hose wall creeps.
@@ -102,8 +90,8 @@ class HoseComplianceB(FamilyBEffect, effect="hose_compliance"):
     )
     diagnosis_model = (
         "one lumped RC stage between the valve and the bore whose wall creeps too "
-        "(Kelvin-Voigt, since 2026-11-26: the same form as this law); the simulator's node "
-        "sits mid-hose and takes the line's fluid and the steel pipe's swell"
+        "(Kelvin-Voigt, the same form as this law); the simulator's node sits mid-hose and "
+        "takes the line's fluid and the steel pipe's swell"
     )
 
     @classmethod

@@ -8,10 +8,11 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
-from brake_hil.virtual_rig.effects import _math as fm
+from brake_hil.virtual_rig import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
-from brake_hil.virtual_rig.family_b.base import FamilyBEffect
-from brake_hil.virtual_rig.laws import LtiPlant, Signal, TruthLaw
+from brake_hil.virtual_rig.family_b.base import FamilyBEffect, register_effect_b
+from brake_hil.virtual_rig.laws import LtiPlant, Signal
+from brake_hil.virtual_rig.mechanics import SharedValve
 
 __all__ = ["BlendedValve", "OrificeFlowB", "describing_function_resistance"]
 
@@ -19,7 +20,7 @@ _QUADRATURE_POINTS = 512
 
 
 @dataclass(frozen=True)
-class BlendedValve(TruthLaw):
+class BlendedValve(SharedValve):
     """Needle valve bound to a rig: a linear share plus a blended laminar-turbulent gap (SI).
 
     The host's valve-drop port.
@@ -41,21 +42,9 @@ class BlendedValve(TruthLaw):
         drop: Signal = flow * (laminar**exponent + turbulent**exponent) ** (1.0 / exponent)
         return drop
 
-    def valve_drop(
-        self,
-        flow: Signal,
-        linear_resistance: float,
-        viscosity_factor: Signal,
-        linear_factor: Signal,
-    ) -> Signal:
-        """Valve drop (Pa): ``(1 - s) R_v Q + s dp_blend(Q)``.
-
-        ``R_v`` is the rig's linearised resistance (Pa s/m^3).
-        """
-        drop: Signal = (1.0 - self.share) * linear_resistance * linear_factor * flow + (
-            self.share * self.blended_drop(flow, viscosity_factor)
-        )
-        return drop
+    def own_drop(self, flow: Signal, viscosity_factor: Signal) -> Signal:
+        """The valve's own drop ``dp_blend(Q)`` (Pa): :meth:`blended_drop`."""
+        return self.blended_drop(flow, viscosity_factor)
 
 
 def describing_function_resistance(valve: BlendedValve, amplitude: float) -> float:
@@ -70,6 +59,7 @@ def describing_function_resistance(valve: BlendedValve, amplitude: float) -> flo
     return float(2.0 / amplitude * np.mean(drop * np.sin(theta)))
 
 
+@register_effect_b
 @dataclass(frozen=True)
 class OrificeFlowB(FamilyBEffect, effect="orifice_flow"):
     """Turbulent orifice flow (family b): the needle valve's gap blends laminar and turbulent flow.

@@ -2,21 +2,21 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-from brake_hil.virtual_rig.effects import _math as fm
+from brake_hil.virtual_rig import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
-from brake_hil.virtual_rig.family_b.base import FamilyBEffect
-from brake_hil.virtual_rig.laws import LtiPlant, Signal, State, TruthLaw
+from brake_hil.virtual_rig.family_b.base import FamilyBEffect, register_effect_b
+from brake_hil.virtual_rig.laws import LtiPlant, Signal
+from brake_hil.virtual_rig.mechanics import RelaxingGroove
 
 __all__ = ["GradedGroove", "SealGrooveAsymmetryB"]
 
 
 @dataclass(frozen=True)
-class GradedGroove(TruthLaw):
+class GradedGroove(RelaxingGroove):
     """The groove's graded stiffness bound to a strength (SI).
 
     The host's spring-deflection port (state ``x_r``, where the seal sits in its groove) and the
@@ -28,40 +28,32 @@ class GradedGroove(TruthLaw):
     creep_time: float  # tau, s, Norton creep time at e = delta
     creep_exponent: float  # p, -, Norton exponent
 
-    def states(self) -> tuple[State, ...]:
-        """Where the seal sits in its groove, ``x_r`` (m)."""
-        return (State("x_r", 1e-5),)
-
-    def initial_state(self, equilibrium: Mapping[str, float]) -> tuple[float, ...]:
-        """At rest the seal sits centred on the seal displacement."""
-        return (equilibrium["seal_displacement"],)
-
-    def seal_asymmetry(self) -> float:
-        """``a``, for a frictional seal's slip threshold."""
-        return self.asymmetry
-
-    def spring_deflection(
-        self, seal_displacement: Signal, states: Sequence[Signal]
-    ) -> tuple[Signal, list[Signal]]:
-        """``x_r + e (1 - a e / (2 delta))`` (m), ``e = x_s - x_r``; ``x_r'`` by Norton's law.
+    def groove_deflection(self, deflection: Signal) -> Signal:
+        """``e (1 - a e / (2 delta))`` (m) at ``e = x_s - x_r``.
 
         The stiffness ``1 - a e / delta`` falls across the clearance toward the apply side and
-        rises toward the release side; ``x_r' = (delta / tau) sign(e) |e / delta|^p`` drags the
-        seal along once ``|e|`` nears ``delta`` and barely moves it inside.
+        rises toward the release side.
         """
-        relaxed = states[0]
-        deflection = seal_displacement - relaxed
         ratio = deflection / self.clearance
-        effective = relaxed + deflection * (1.0 - 0.5 * self.asymmetry * ratio)
-        creep = (
+        shifted: Signal = deflection * (1.0 - 0.5 * self.asymmetry * ratio)
+        return shifted
+
+    def relaxation_rate(self, deflection: Signal) -> Signal:
+        """``x_r' = (delta / tau) sign(e) |e / delta|^p`` (m/s), Norton's law.
+
+        It drags the seal along once ``|e|`` nears ``delta`` and barely moves it inside.
+        """
+        ratio = deflection / self.clearance
+        creep: Signal = (
             self.clearance
             / self.creep_time
             * ratio
             * fm.absolute(ratio) ** (self.creep_exponent - 1.0)
         )
-        return effective, [creep]
+        return creep
 
 
+@register_effect_b
 @dataclass(frozen=True)
 class SealGrooveAsymmetryB(FamilyBEffect, effect="seal_groove_asymmetry"):
     """Seal-groove asymmetry (family b): the seal's stiffness graded across its groove clearance.

@@ -2,27 +2,29 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 import math
 
 import numpy as np
 
 from brake_hil.physics.parameters import seal_properties
-from brake_hil.virtual_rig.effects import _math as fm
+from brake_hil.virtual_rig import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
-from brake_hil.virtual_rig.effects.seal_stick_slip import smooth_speed
-from brake_hil.virtual_rig.family_b.base import FamilyBEffect
-from brake_hil.virtual_rig.laws import LtiPlant, Signal, State, TruthLaw
+from brake_hil.virtual_rig.family_b.base import FamilyBEffect, register_effect_b
+from brake_hil.virtual_rig.laws import LtiPlant, SealPorts, Signal
+from brake_hil.virtual_rig.mechanics import (
+    ASYMMETRY_WIDTH_SHARE,
+    FrictionalSeal,
+    asymmetric_limit,
+    smooth_speed,
+    structural_damping,
+)
 
 __all__ = ["BoucWenSeal", "SealStickSlipB"]
 
-ASYMMETRY_WIDTH_SHARE = 0.25
-"""Width of the apply/release switch of an asymmetric seal, as a share of the yield deflection."""
-
 
 @dataclass(frozen=True)
-class BoucWenSeal(TruthLaw):
+class BoucWenSeal(FrictionalSeal):
     """Bouc-Wen hysteresis of both seals together, bound to a rig (SI).
 
     The host's seal-force port (state ``z``, the seals' elastic shear deflection) and structural
@@ -52,9 +54,7 @@ class BoucWenSeal(TruthLaw):
         """
         limit = self.yield_deflection
         if asymmetry:
-            limit = limit * (
-                1.0 - asymmetry * fm.tanh(deflection / (ASYMMETRY_WIDTH_SHARE * limit))
-            )
+            limit = asymmetric_limit(limit, asymmetry, deflection, ASYMMETRY_WIDTH_SHARE * limit)
         ratio = deflection / limit
         power = fm.absolute(ratio) ** (self.sharpness - 1.0)
         rate: Signal = velocity - 0.5 * power * (
@@ -62,47 +62,26 @@ class BoucWenSeal(TruthLaw):
         )
         return rate
 
-    def states(self) -> tuple[State, ...]:
-        """The seals' elastic shear deflection ``z`` (m)."""
-        return (State("z", 1e-5),)
+    def rest_limit(self) -> float:
+        """At rest the seals are sheared below their yield (m)."""
+        return 0.9 * self.yield_deflection
 
-    def initial_state(self, equilibrium: Mapping[str, float]) -> tuple[float, ...]:
-        """At rest the seals are sheared by the seal displacement, below their yield."""
-        limit = 0.9 * self.yield_deflection
-        return (float(np.clip(equilibrium["seal_displacement"], -limit, limit)),)
-
-    def spring_share(self) -> float:
-        """What the equivalent spring and damper keep: ``1 - share``."""
-        return 1.0 - self.share
-
-    def seal_force(
-        self,
-        spring_force: Signal,
-        velocity: Signal,
-        asymmetry: float,
-        modulus_factor: Signal,
-        viscosity_factor: Signal,
-        states: Sequence[Signal],
-    ) -> tuple[Signal, list[Signal]]:
-        """``(1 - share) F_spring + share (E k z + c_r v + mu c_f v)`` (N), and ``z'`` (m/s).
+    def own_force(self, deflection: Signal, seal: SealPorts) -> tuple[Signal, Signal]:
+        """``E k z + c_r v + mu c_f v`` (N), and ``z'`` (m/s).
 
         The seal modulus's drift factor ``E`` scales the stiffness and (through the squeeze
         force) the yield force alike, so the yield deflection stays.
         """
-        z = states[0]
-        rate = self.deflection_rate(z, velocity, asymmetry)
+        velocity = seal.velocity
+        rate = self.deflection_rate(deflection, velocity, seal.asymmetry)
         hysteretic = (
-            self.stiffness * modulus_factor * z
-            + (self.internal_damping + self.film_damping * viscosity_factor) * velocity
+            self.stiffness * seal.modulus_factor * deflection
+            + (self.internal_damping + self.film_damping * seal.viscosity_factor) * velocity
         )
-        force = (1.0 - self.share) * spring_force + self.share * hysteretic
-        return force, [rate]
-
-    def structural_damping(self) -> tuple[float, float]:
-        """Caliper to ground and piston to block (N s/m)."""
-        return self.caliper_damping, self.block_damping
+        return hysteretic, rate
 
 
+@register_effect_b
 @dataclass(frozen=True)
 class SealStickSlipB(FamilyBEffect, effect="seal_stick_slip"):
     """Seal stick-slip (family b): each seal a Bouc-Wen element, elastic then yielding smoothly.
@@ -162,7 +141,9 @@ class SealStickSlipB(FamilyBEffect, effect="seal_stick_slip"):
         seal = seal_properties(plant.rig)
         stiffness = 2.0 * seal.static_stiffness
         params = plant.params
-        ratio = 2.0 * self.strength * self.structural_damping_ratio
+        caliper_damping, block_damping = structural_damping(
+            params, 2.0 * self.strength * self.structural_damping_ratio
+        )
         return BoucWenSeal(
             stiffness=stiffness,
             yield_force=self.yield_ratio * 2.0 * seal.friction_threshold,
@@ -172,6 +153,6 @@ class SealStickSlipB(FamilyBEffect, effect="seal_stick_slip"):
             * math.sqrt(stiffness * params.piston_mass),
             film_damping=self.film_damping,
             share=self.strength,
-            caliper_damping=ratio * math.sqrt(params.caliper_stiffness * params.caliper_mass),
-            block_damping=ratio * math.sqrt(params.block_stiffness * params.piston_mass),
+            caliper_damping=caliper_damping,
+            block_damping=block_damping,
         )

@@ -15,7 +15,7 @@ from brake_hil.virtual_rig.family_b._filters import (
     low_pass,
     transport_delay,
 )
-from brake_hil.virtual_rig.family_b.base import FamilyBEffect
+from brake_hil.virtual_rig.family_b.base import FamilyBEffect, register_effect_b
 from brake_hil.virtual_rig.laws import LtiPlant, TruthLaw
 
 __all__ = ["FilteredTransport", "SensorDelayB"]
@@ -57,6 +57,7 @@ class FilteredTransport(TruthLaw):
         return self.apply(time, values) if channel == self.channel else values
 
 
+@register_effect_b
 @dataclass(frozen=True)
 class SensorDelayB(FamilyBEffect, effect="sensor_delay"):
     """Sensor delay (family b): one channel passes a frame buffer and a 2nd-order low-pass.

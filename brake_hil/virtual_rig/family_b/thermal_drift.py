@@ -8,10 +8,11 @@ import math
 
 import numpy as np
 
-from brake_hil.virtual_rig.effects import _math as fm
+from brake_hil.virtual_rig import _math as fm
 from brake_hil.virtual_rig.effects.base import STRENGTH, Effect, Parameter
-from brake_hil.virtual_rig.family_b.base import FamilyBEffect
+from brake_hil.virtual_rig.family_b.base import FamilyBEffect, register_effect_b
 from brake_hil.virtual_rig.laws import LtiPlant, Signal, TruthLaw
+from brake_hil.virtual_rig.mechanics import heated_temperature
 
 __all__ = ["ThermalDriftB", "TwoNodeHeating", "walther_viscosity"]
 
@@ -54,9 +55,9 @@ class TwoNodeHeating(TruthLaw):
 
     def fluid_temperature(self, time: Signal) -> Signal:
         """``T_f = T_0 + dT (1 - exp(-t / tau_f))`` (K), ``t`` in s from the start."""
-        rise = -fm.expm1(-fm.maximum(time, 0.0) / self.fluid_time_constant)
-        temperature: Signal = self.ambient_temperature + self.temperature_rise * rise
-        return temperature
+        return heated_temperature(
+            time, self.ambient_temperature, self.temperature_rise, self.fluid_time_constant
+        )
 
     def seal_temperature(self, time: Signal) -> Signal:
         """``T_s`` (K): the seal heated by the fluid, ``tau_s T_s' = T_f - T_s``.
@@ -96,6 +97,7 @@ class TwoNodeHeating(TruthLaw):
         }
 
 
+@register_effect_b
 @dataclass(frozen=True)
 class ThermalDriftB(FamilyBEffect, effect="thermal_drift"):
     """Thermal drift (family b): the fluid warms first, the seals after it, through a network.
