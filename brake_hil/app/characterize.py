@@ -1,4 +1,4 @@
-"""``brake-hil characterize``: the seed's Table 3 (and Table 1) per steady segment."""
+"""``brake-hil characterize``: the paper's Table 3 (and Table 1) per steady segment."""
 
 from __future__ import annotations
 
