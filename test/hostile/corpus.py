@@ -1,4 +1,4 @@
-"""A reproducible corpus of hostile inputs: every kind issue 11 lists, made from the good files.
+"""A reproducible corpus of hostile inputs of every kind, made from the good files.
 
 ``python -m test.hostile.corpus DIR`` writes it; :func:`build` returns the cases. Each
 :class:`Case` says which commands to run, what it expects (``refused``: exit 2 with one line
