@@ -73,7 +73,7 @@ class SegmentCharacterization:
     harmonic_energy_pct: dict[str, list[float]]  # Table 1, per signal
 
     def as_dict(self) -> dict[str, object]:
-        """JSON-ready mapping (interface.md's characterize segment)."""
+        """JSON-ready mapping (docs/interface.md's characterize segment)."""
         return asdict(self)
 
 

@@ -1,6 +1,6 @@
 """Read a rig recording into a :class:`~brake_hil.analysis.recording.Recording`.
 
-Accepted (interface.md, "Recordings"): a rosbag2 directory (``metadata.yaml`` with one or
+Accepted (docs/interface.md, "Recordings"): a rosbag2 directory (``metadata.yaml`` with one or
 more ``.mcap`` or ``.db3`` files), a bare ``.mcap`` file and a bare ``.db3`` file. rosbags'
 ``Reader`` yields raw CDR bytes, so only the brake topics are decoded, by
 :mod:`brake_hil.io.stamped_cdr`; unrelated topics, unknown types and service events are

@@ -158,7 +158,7 @@ def chamber_volumes(rig: Rig) -> tuple[float, float]:
 def derive_parameters(rig: Rig, mean_pressure: float = DEFAULT_MEAN_PRESSURE) -> ModelParameters:
     """All LTI-model coefficients from a rig at a mean master-cylinder pressure (Pa).
 
-    Values in the rig's ``model:`` mapping replace the derived ones (interface.md).
+    Values in the rig's ``model:`` mapping replace the derived ones (docs/interface.md).
     """
     seal = seal_properties(rig)
     area_ep = piston_area(rig)
