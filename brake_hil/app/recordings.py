@@ -15,7 +15,7 @@ import os
 from pathlib import Path
 
 from brake_hil.errors import BrakeHilError
-from brake_hil.io.opened import RECORDING_SUFFIXES, recording_name, rig_beside
+from brake_hil.io.recording_paths import RECORDING_SUFFIXES, recording_name, rig_beside
 
 __all__ = [
     "RECORDING_SUFFIXES",

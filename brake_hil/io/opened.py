@@ -16,22 +16,13 @@ from pathlib import Path
 from typing import Final
 
 from brake_hil.analysis.recording import Recording
-from brake_hil.errors import BrakeHilError
+from brake_hil.io.recording_paths import rig_beside
 from brake_hil.io.recording_reader import read_recording
 from brake_hil.physics.rig import Rig, load_rig
 from brake_hil.topics import MASTER_CYLINDER_PRESSURE, MEASURED_OUTPUTS, TopicSpec
 
-__all__ = [
-    "MODEL_TOPICS",
-    "RECORDING_SUFFIXES",
-    "OpenedRecording",
-    "open_recording",
-    "recording_name",
-    "rig_beside",
-]
+__all__ = ["MODEL_TOPICS", "OpenedRecording", "open_recording"]
 
-RECORDING_SUFFIXES: Final = (".mcap", ".db3")
-"""Suffixes of the files a rosbag2 recording is stored in."""
 MODEL_TOPICS: Final = (MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS)
 """What a recording must hold to be compared with the model: ``p_i`` and the three outputs."""
 
@@ -43,28 +34,6 @@ class OpenedRecording:
     recording: Recording
     rig_path: Path
     rig: Rig
-
-
-def rig_beside(recording: Path) -> Path:
-    """``RECORDING.rig.yaml`` beside a recording (a bag folder or a bare ``.mcap``/``.db3``).
-
-    Raises:
-        BrakeHilError: no such file (the message says to pass ``--rig``).
-    """
-    base = Path(str(recording).rstrip("/"))
-    candidates = [base.parent / f"{base.name}.rig.yaml"]
-    if base.suffix in RECORDING_SUFFIXES:
-        candidates.append(base.with_suffix(".rig.yaml"))
-    for path in candidates:
-        if path.is_file():
-            return path
-    raise BrakeHilError(f"{recording}: no rig file beside it ({candidates[0]}); pass --rig")
-
-
-def recording_name(recording: Path) -> str:
-    """A recording's name: its folder's, or its file's without the suffix."""
-    base = Path(str(recording).rstrip("/"))
-    return base.stem if base.suffix in RECORDING_SUFFIXES else base.name
 
 
 def open_recording(
