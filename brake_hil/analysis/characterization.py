@@ -73,7 +73,7 @@ class SegmentCharacterization:
     harmonic_energy_pct: dict[str, list[float]]  # Table 1, per signal
 
     def as_dict(self) -> dict[str, object]:
-        """JSON-ready mapping (interface.md's characterize segment)."""
+        """JSON-ready mapping (docs/interface.md's characterize segment)."""
         return asdict(self)
 
 
@@ -115,6 +115,26 @@ def characterize(recording: Recording, rig: Rig) -> list[SegmentCharacterization
     return [
         _characterize_segment(recording.time, filtered, rig, start, end) for start, end in segments
     ]
+
+
+def _bore_friction_damping(
+    rig: Rig, bore_pressure: FloatArray, caliper_displacement: FloatArray, amplitude: float
+) -> float:
+    """Equivalent viscous damping ``c_fb`` of the bore's friction over a segment (N s/m).
+
+    The mean friction force (from the bore friction coefficient and area ratio, the piston
+    area and the mean ``|p_b x_c|`` over the transducer distance), as the viscous damper
+    that dissipates as much per cycle at the seal's displacement ``amplitude`` (m).
+    """
+    mean_friction = (
+        4.0
+        * rig.bore_friction_coefficient
+        * rig.bore_area_ratio
+        * piston_area(rig)
+        * float(np.mean(np.abs(bore_pressure * caliper_displacement)))
+        / rig.transducer_distance
+    )
+    return mean_friction / (excitation_angular_frequency(rig) * amplitude * 2.0 / math.pi)
 
 
 def _characterize_segment(
@@ -163,16 +183,7 @@ def _characterize_segment(
     sticking_share = min(1.0, seal.slip_threshold / (2.0 * amplitude))
     c_ss = seal.static_stiffness * rig.seal.loss_factor / omega * sticking_share
     bore_pressure = filtered["p_b"][window]
-    caliper_displacement = filtered["x_c"][window]
-    mean_friction = (
-        4.0
-        * rig.bore_friction_coefficient
-        * rig.bore_area_ratio
-        * area_ep
-        * float(np.mean(np.abs(bore_pressure * caliper_displacement)))
-        / rig.transducer_distance
-    )
-    c_fb = mean_friction / (omega * amplitude * 2.0 / math.pi)
+    c_fb = _bore_friction_damping(rig, bore_pressure, filtered["x_c"][window], amplitude)
     harmonics = {
         key: [
             float(v)

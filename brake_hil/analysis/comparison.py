@@ -59,7 +59,7 @@ class Comparison:
         return result
 
     def as_dict(self) -> dict[str, object]:
-        """The JSON of ``brake-hil compare`` (interface.md)."""
+        """The JSON of ``brake-hil compare`` (docs/interface.md)."""
         return {
             "metrics": self.metrics(),
             "segments": [

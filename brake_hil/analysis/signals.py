@@ -17,83 +17,63 @@ Conventions: signals are 1-D float arrays in any consistent unit (Pa, N, m); tim
 seconds; a segment ``(start_s, end_s)`` is the half-open interval ``start_s <= t < end_s``
 (use :func:`segment_slice` to cut it out of sampled data). Every function refuses unusable
 input (wrong shape, NaN, too short, no oscillation) with :class:`~brake_hil.errors.SignalError`.
+
+The whole cycles of a signal live in :mod:`brake_hil.analysis.cycles`, the Tables 4-5
+metrics in :mod:`brake_hil.analysis.cycle_metrics`; both are re-exported here.
 """
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
 import math
-from typing import NamedTuple
 
 import numpy as np
 import numpy.typing as npt
 from scipy import signal as sps  # type: ignore[import-untyped]
 
+from brake_hil.analysis.cycle_metrics import (
+    ChannelMetrics,
+    CrossingOffsets,
+    cycle_metrics,
+    mean_crossing_offsets,
+    nrmse,
+)
+from brake_hil.analysis.cycles import (
+    EXCITATION_PERIOD_S,
+    as_same_length,
+    as_signal,
+    as_time,
+    check_positive,
+    peak_to_peak,
+    per_cycle_peak_to_peak,
+    segment_slice,
+    whole_cycles,
+)
 from brake_hil.errors import NoSteadyPulsingError, SignalError
-from brake_hil.types import FloatArray, IndexArray
+from brake_hil.types import FloatArray
 
-EXCITATION_PERIOD_S = 0.2
-"""Period ``T`` of the seed's 5 Hz excitation (s)."""
-
-# Schmitt-trigger band around the mean used to count one crossing per edge, as a fraction of
-# the signal's half range (1st to 99th percentile): noise cannot add crossings.
-_CROSSING_HYSTERESIS = 0.1
+__all__ = [
+    "EXCITATION_PERIOD_S",
+    "ChannelMetrics",
+    "CrossingOffsets",
+    "bandpass",
+    "cycle_metrics",
+    "harmonic_energy_shares",
+    "harmonic_phasor",
+    "lowpass",
+    "mean_crossing_offsets",
+    "nrmse",
+    "peak_to_peak",
+    "per_cycle_peak_to_peak",
+    "segment_slice",
+    "steady_segments",
+    "whole_cycles",
+]
 
 # steady_segments thresholds (see its docstring).
 _MIN_FUNDAMENTAL_SHARE = 0.7
 _MAX_DRIFT_PER_PERIOD = 0.1
 _MIN_RELATIVE_AMPLITUDE = 0.1
 _MIN_SEGMENT_PERIODS = 3
-
-
-# --------------------------------------------------------------------------- validation
-
-
-def _as_signal(values: npt.ArrayLike, name: str, min_samples: int = 2) -> FloatArray:
-    """Return ``values`` as a finite 1-D float64 array, or raise SignalError naming it."""
-    array = np.asarray(values, dtype=np.float64)
-    if array.ndim != 1:
-        msg = f"{name} must be a 1-D array, got shape {array.shape}."
-        raise SignalError(msg)
-    if array.size < min_samples:
-        msg = f"{name} has {array.size} samples, at least {min_samples} are needed."
-        raise SignalError(msg)
-    if not np.all(np.isfinite(array)):
-        bad = int(np.count_nonzero(~np.isfinite(array)))
-        msg = f"{name} holds {bad} non-finite samples (NaN or inf)."
-        raise SignalError(msg)
-    return array
-
-
-def _as_same_length(named: dict[str, npt.ArrayLike]) -> list[FloatArray]:
-    """Convert several signals and check that they have one length."""
-    arrays = [_as_signal(values, name) for name, values in named.items()]
-    lengths = {name: array.size for name, array in zip(named, arrays)}
-    if len(set(lengths.values())) > 1:
-        listed = ", ".join(f"{name} {size}" for name, size in lengths.items())
-        msg = f"Signals must have the same number of samples, got {listed}."
-        raise SignalError(msg)
-    return arrays
-
-
-def _as_time(time_s: npt.ArrayLike) -> FloatArray:
-    """Return ``time_s`` (s) as a strictly increasing finite array."""
-    time = _as_signal(time_s, "time_s")
-    if np.any(np.diff(time) <= 0.0):
-        msg = "time_s must be strictly increasing (s)."
-        raise SignalError(msg)
-    return time
-
-
-def _check_positive(value: float, name: str) -> None:
-    if not (math.isfinite(value) and value > 0.0):
-        msg = f"{name} must be a positive finite number, got {value!r}."
-        raise SignalError(msg)
-
-
-def _sample_interval(time: FloatArray) -> float:
-    """Median sample interval (s)."""
-    return float(np.median(np.diff(time)))
 
 
 # --------------------------------------------------------------------------- filters
@@ -107,7 +87,7 @@ def _zero_phase(
     order: int,
 ) -> FloatArray:
     """Butterworth ``btype`` filter applied forward and backward (second-order sections)."""
-    _check_positive(sample_rate_hz, "sample_rate_hz")
+    check_positive(sample_rate_hz, "sample_rate_hz")
     if order < 1:
         msg = f"Filter order must be at least 1, got {order}."
         raise SignalError(msg)
@@ -126,7 +106,7 @@ def _zero_phase(
     sos = sps.butter(order, cutoff_hz, btype=btype, fs=sample_rate_hz, output="sos")
     # sosfiltfilt pads with an odd extension of this many samples (scipy's default).
     taps = 2 * sos.shape[0] + 1 - min(int(np.sum(sos[:, 2] == 0)), int(np.sum(sos[:, 5] == 0)))
-    array = _as_signal(values, "signal", min_samples=3 * taps + 1)
+    array = as_signal(values, "signal", min_samples=3 * taps + 1)
     filtered: FloatArray = np.asarray(sps.sosfiltfilt(sos, array), dtype=np.float64)
     return filtered
 
@@ -221,8 +201,8 @@ def harmonic_energy_shares(
         SignalError: Fewer whole periods than needed to separate the harmonics, a harmonic above
             the Nyquist frequency, or no energy at the harmonics.
     """
-    _check_positive(sample_rate_hz, "sample_rate_hz")
-    _check_positive(fundamental_hz, "fundamental_hz")
+    check_positive(sample_rate_hz, "sample_rate_hz")
+    check_positive(fundamental_hz, "fundamental_hz")
     if count < 1 or half_width_bins < 0:
         msg = f"count must be >= 1 and half_width_bins >= 0, got {count}, {half_width_bins}."
         raise SignalError(msg)
@@ -232,7 +212,7 @@ def harmonic_energy_shares(
             f"of {sample_rate_hz} Hz sampling."
         )
         raise SignalError(msg)
-    array = _as_signal(signal, "signal")
+    array = as_signal(signal, "signal")
     samples_per_period = sample_rate_hz / fundamental_hz
     periods = int(array.size / samples_per_period + 1e-9)
     while periods > 0 and round(periods * samples_per_period) > array.size:
@@ -261,9 +241,6 @@ def harmonic_energy_shares(
     return shares
 
 
-# --------------------------------------------------------------------------- cycles
-
-
 def harmonic_phasor(signal: npt.ArrayLike, time_s: npt.ArrayLike, frequency_hz: float) -> complex:
     """Complex amplitude ``X`` of the ``frequency_hz`` component: ``x(t) ~ Re(X e^{jwt})``.
 
@@ -271,316 +248,14 @@ def harmonic_phasor(signal: npt.ArrayLike, time_s: npt.ArrayLike, frequency_hz: 
     (pass whole cycles), ``X = a - j b``. It is what the seed's 4-6 Hz band-pass isolates,
     in the limit of a narrow band, without the filter's transients at the segment's ends.
     """
-    values, time = _as_same_length({"signal": signal, "time_s": time_s})
-    time = _as_time(time)
-    _check_positive(frequency_hz, "frequency_hz")
+    values, time = as_same_length({"signal": signal, "time_s": time_s})
+    time = as_time(time)
+    check_positive(frequency_hz, "frequency_hz")
     phase = 2.0 * np.pi * frequency_hz * time
     centred = time - time.mean()
     basis = np.column_stack([np.ones_like(time), centred, np.cos(phase), np.sin(phase)])
     coefficients, *_ = np.linalg.lstsq(basis, values, rcond=None)
     return complex(coefficients[2], -coefficients[3])
-
-
-def whole_cycles(
-    start_s: float, end_s: float, period_s: float = EXCITATION_PERIOD_S
-) -> tuple[float, float]:
-    """Trim ``[start_s, end_s)`` (s) at its end to a whole number of periods ``period_s`` (s).
-
-    Raises:
-        SignalError: The interval is shorter than one period.
-    """
-    _check_positive(period_s, "period_s")
-    cycles = math.floor((end_s - start_s) / period_s + 1e-9)
-    if cycles < 1:
-        msg = f"Interval {start_s:.6g}-{end_s:.6g} s is shorter than one period of {period_s} s."
-        raise SignalError(msg)
-    return start_s, start_s + cycles * period_s
-
-
-def segment_slice(time_s: npt.ArrayLike, start_s: float, end_s: float) -> slice:
-    """Index slice of the samples with ``start_s <= t < end_s`` (s).
-
-    Bounds are compared half a sample interval early, so that a segment of ``m`` periods
-    starting on a sample holds exactly ``m`` periods' worth of samples despite rounding.
-    """
-    time = _as_time(time_s)
-    half = 0.5 * _sample_interval(time)
-    first = int(np.searchsorted(time, start_s - half, side="left"))
-    stop = int(np.searchsorted(time, end_s - half, side="left"))
-    return slice(first, max(first, stop))
-
-
-def _cycle_bounds(time: FloatArray, period_s: float) -> IndexArray:
-    """Sample indices bounding the whole cycles ``[t0 + c T, t0 + (c + 1) T)``."""
-    _check_positive(period_s, "period_s")
-    interval = _sample_interval(time)
-    span = time[-1] - time[0] + interval  # the last sample covers one interval
-    cycles = math.floor((span + 0.5 * interval) / period_s)
-    if cycles < 1:
-        msg = (
-            f"Signal spans {span:.6g} s, shorter than one period of {period_s} s: no whole "
-            "cycle to analyse."
-        )
-        raise SignalError(msg)
-    edges = time[0] + period_s * np.arange(cycles + 1) - 0.5 * interval
-    bounds: IndexArray = np.searchsorted(time, edges, side="left")
-    return bounds
-
-
-def peak_to_peak(signal: npt.ArrayLike) -> float:
-    """Peak-to-peak value ``max - min`` of ``signal`` (its unit)."""
-    array = _as_signal(signal, "signal", min_samples=1)
-    return float(array.max() - array.min())
-
-
-def per_cycle_peak_to_peak(
-    signal: npt.ArrayLike, time_s: npt.ArrayLike, period_s: float = EXCITATION_PERIOD_S
-) -> float:
-    """Median over whole cycles of the peak-to-peak value within each cycle (signal's unit).
-
-    Cycles are ``[t0 + c T, t0 + (c + 1) T)`` from the first sample ``t0`` with ``T`` =
-    ``period_s`` (s); a trailing partial cycle is ignored. The median makes the value
-    insensitive to one disturbed cycle and, unlike :func:`peak_to_peak`, to a slow drift of
-    the mean.
-
-    Raises:
-        SignalError: Mismatched lengths, NaN samples, or less than one whole cycle.
-    """
-    array, time = _as_same_length({"signal": signal, "time_s": time_s})
-    time = _as_time(time)
-    bounds = _cycle_bounds(time, period_s)
-    starts = bounds[:-1]
-    highs = np.maximum.reduceat(array, starts)[: starts.size]
-    lows = np.minimum.reduceat(array, starts)[: starts.size]
-    # reduceat's last group runs to the end of the array: recompute it within its cycle.
-    last = slice(int(bounds[-2]), int(bounds[-1]))
-    highs[-1] = array[last].max()
-    lows[-1] = array[last].min()
-    return float(np.median(highs - lows))
-
-
-# --------------------------------------------------------------------------- time offsets
-
-
-class CrossingOffsets(NamedTuple):
-    """Time offsets (s) between predicted and measured mean crossings (seed Tables 4-5).
-
-    Each is ``t_measured - t_predicted``: positive when the prediction crosses first.
-    """
-
-    tau_1_s: float
-    """Falling edge (s)."""
-    tau_2_s: float
-    """Rising edge (s)."""
-    tau_s: float
-    """``(tau_1 + tau_2) / 2`` (s)."""
-
-
-def _mean_crossings(
-    values: FloatArray, time: FloatArray, bounds: IndexArray
-) -> tuple[FloatArray, FloatArray]:
-    """Times (s) where ``values`` crosses its mean downward and upward.
-
-    The mean is taken over the whole cycles (``bounds``). A Schmitt trigger (band of
-    +/- ``_CROSSING_HYSTERESIS`` of the half range around the mean) finds the edges, so
-    noise near the mean cannot add crossings. An edge runs from the last sample beyond the
-    band on one side to the first sample beyond it on the other; its crossing time is the
-    zero of the least-squares straight line through those samples. With two samples (a
-    steep edge) this is linear interpolation between them; with more it averages noise
-    instead of picking one of several noisy sign changes.
-    """
-    centred = values - values[bounds[0] : bounds[-1]].mean()
-    low, high = np.percentile(centred, [1.0, 99.0])
-    band = _CROSSING_HYSTERESIS * 0.5 * float(high - low)
-    state = np.where(centred > band, 1, np.where(centred < -band, -1, 0))
-    marked = np.flatnonzero(state)
-    levels = state[marked]
-    switches = np.flatnonzero(np.diff(levels))
-    falling: list[float] = []
-    rising: list[float] = []
-    for switch in switches:
-        first, last = int(marked[switch]), int(marked[switch + 1])
-        local_time = time[first : last + 1] - time[first]
-        local_value = centred[first : last + 1]
-        time_dev = local_time - local_time.mean()
-        slope = float(np.dot(time_dev, local_value) / np.dot(time_dev, time_dev))
-        if slope == 0.0:  # a pathological noisy edge: take its middle
-            zero = float(local_time.mean())
-        else:  # within the edge's samples
-            zero = min(
-                max(float(local_time.mean()) - float(local_value.mean()) / slope, 0.0),
-                float(local_time[-1]),
-            )
-        (rising if levels[switch + 1] > 0 else falling).append(float(time[first] + zero))
-    return np.asarray(falling, dtype=np.float64), np.asarray(rising, dtype=np.float64)
-
-
-def _paired_offset(
-    predicted: FloatArray, measured: FloatArray, period_s: float, edge: str
-) -> float:
-    """Mean of ``t_measured - t_predicted`` (s) over crossings paired within half a period."""
-    for name, crossings in (("predicted", predicted), ("measured", measured)):
-        if crossings.size == 0:
-            msg = f"No {edge} mean crossing in the {name} signal."
-            raise SignalError(msg)
-    right = np.clip(np.searchsorted(predicted, measured), 1, predicted.size - 1)
-    if predicted.size == 1:
-        nearest = np.zeros(measured.size, dtype=np.intp)
-    else:
-        left = right - 1
-        closer_left = np.abs(measured - predicted[left]) <= np.abs(predicted[right] - measured)
-        nearest = np.where(closer_left, left, right)
-    offsets = measured - predicted[nearest]
-    offsets = offsets[np.abs(offsets) <= 0.5 * period_s]
-    if offsets.size == 0:
-        msg = f"No {edge} mean crossings of the two signals lie within half a period."
-        raise SignalError(msg)
-    return float(offsets.mean())
-
-
-def mean_crossing_offsets(
-    predicted: npt.ArrayLike,
-    measured: npt.ArrayLike,
-    time_s: npt.ArrayLike,
-    period_s: float = EXCITATION_PERIOD_S,
-) -> CrossingOffsets:
-    """Time offsets (s) at the mean crossings, falling and rising (seed Tables 4-5).
-
-    Each signal's crossings of its own mean (taken over the whole cycles of the window) are
-    located between samples, one per edge: a hysteresis band of +/- 10 % of the half range
-    keeps noise from adding crossings, and the crossing is the zero of a straight line
-    fitted through the edge's samples inside the band (plain linear interpolation when the
-    edge crosses the band between two samples). Each measured crossing is paired with the nearest
-    predicted crossing of the same direction; pairs more than ``period_s / 2`` apart (at the
-    window edges) are dropped. ``tau_1`` is the mean offset over falling edges, ``tau_2``
-    over rising edges, ``tau = (tau_1 + tau_2) / 2``; each offset is
-    ``t_measured - t_predicted``, positive when the prediction crosses first, as in the
-    seed ("tau > 0 indicates that the predicted signal passes the mean value before the
-    measured signal").
-
-    Each signal crosses its own mean, so a DC offset or gain error in the prediction does
-    not appear as a time offset. (The seed says the offset "is quantified at the mean value
-    of the measured signal"; for a prediction with a different mean that level can miss the
-    prediction entirely.)
-
-    Args:
-        predicted: Samples on the common time base ``time_s`` (same unit as ``measured``).
-        measured: Samples on the common time base ``time_s`` (same unit as ``predicted``).
-        time_s: Sample times (s), strictly increasing.
-        period_s: Excitation period ``T`` (s); 0.2 s in the seed.
-
-    Raises:
-        SignalError: Mismatched lengths, NaN samples, less than one whole cycle, or no crossing of
-            one direction that pairs.
-    """
-    predicted_arr, measured_arr, time = _as_same_length(
-        {"predicted": predicted, "measured": measured, "time_s": time_s}
-    )
-    time = _as_time(time)
-    bounds = _cycle_bounds(time, period_s)
-    predicted_down, predicted_up = _mean_crossings(predicted_arr, time, bounds)
-    measured_down, measured_up = _mean_crossings(measured_arr, time, bounds)
-    tau_1 = _paired_offset(predicted_down, measured_down, period_s, "falling")
-    tau_2 = _paired_offset(predicted_up, measured_up, period_s, "rising")
-    return CrossingOffsets(tau_1, tau_2, 0.5 * (tau_1 + tau_2))
-
-
-# --------------------------------------------------------------------------- errors
-
-
-def nrmse(predicted: npt.ArrayLike, measured: npt.ArrayLike) -> float:
-    """Normalised RMS error: ``RMS(predicted - measured) / (max(measured) - min(measured))``.
-
-    Dimensionless (0 for a perfect prediction). Normalising by the measured peak-to-peak
-    rather than the RMS of the measurement keeps the value meaningful for signals with a
-    large mean (a bore pressure of 0.9 MPa mean pulsing by 0.6 MPa).
-
-    Raises:
-        SignalError: Mismatched lengths, NaN samples, or a measured signal with no range.
-    """
-    predicted_arr, measured_arr = _as_same_length({"predicted": predicted, "measured": measured})
-    span = float(measured_arr.max() - measured_arr.min())
-    if not span > 0.0:
-        msg = "measured signal is constant: its peak-to-peak is zero, NRMSE is undefined."
-        raise SignalError(msg)
-    return float(np.sqrt(np.mean((predicted_arr - measured_arr) ** 2)) / span)
-
-
-@dataclass(frozen=True)
-class ChannelMetrics:
-    """The seed's Tables 4-5 comparison of one channel over steady cycles."""
-
-    ptp_ratio_pct: float
-    """Predicted-to-measured per-cycle peak-to-peak ratio (%); 100 is perfect."""
-    tau_over_T_pct: float
-    """``100 tau / T`` (%), positive when the prediction crosses its mean first."""
-    tau_1_s: float
-    """Falling-edge time offset (s)."""
-    tau_2_s: float
-    """Rising-edge time offset (s)."""
-    tau_s: float
-    """``(tau_1 + tau_2) / 2`` (s)."""
-    nrmse: float
-    """RMS error over the measured peak-to-peak (-)."""
-    predicted_ptp: float
-    """Median per-cycle peak-to-peak of the prediction (channel unit)."""
-    measured_ptp: float
-    """Median per-cycle peak-to-peak of the measurement (channel unit)."""
-    period_s: float
-    """Excitation period ``T`` (s)."""
-    cycles: int
-    """Whole cycles analysed."""
-
-    def as_dict(self) -> dict[str, float | int]:
-        """Plain mapping for JSON (the ``M`` of ``compare`` and ``diagnosis.json``)."""
-        return asdict(self)
-
-
-def cycle_metrics(
-    predicted: npt.ArrayLike,
-    measured: npt.ArrayLike,
-    time_s: npt.ArrayLike,
-    period_s: float = EXCITATION_PERIOD_S,
-) -> ChannelMetrics:
-    """Compare a prediction with a measurement over steady cycles (seed Tables 4-5).
-
-    Pass the samples of one steady segment (see :func:`steady_segments`), both filtered as
-    the seed filters them. The peak-to-peak values are per-cycle medians
-    (:func:`per_cycle_peak_to_peak`); the time offsets come from
-    :func:`mean_crossing_offsets`; NRMSE from :func:`nrmse`.
-
-    Args:
-        predicted: Samples on the common time base ``time_s`` (same unit as ``measured``).
-        measured: Samples on the common time base ``time_s`` (same unit as ``predicted``).
-        time_s: Sample times (s), strictly increasing.
-        period_s: Excitation period ``T`` (s); 0.2 s in the seed.
-
-    Raises:
-        SignalError: Mismatched lengths, NaN samples, less than one whole cycle, a measurement
-            without oscillation, or no pairable mean crossings.
-    """
-    predicted_arr, measured_arr, time = _as_same_length(
-        {"predicted": predicted, "measured": measured, "time_s": time_s}
-    )
-    time = _as_time(time)
-    measured_ptp = per_cycle_peak_to_peak(measured_arr, time, period_s)
-    if not measured_ptp > 0.0:
-        msg = "measured signal does not oscillate: its peak-to-peak is zero."
-        raise SignalError(msg)
-    predicted_ptp = per_cycle_peak_to_peak(predicted_arr, time, period_s)
-    offsets = mean_crossing_offsets(predicted_arr, measured_arr, time, period_s)
-    return ChannelMetrics(
-        ptp_ratio_pct=100.0 * predicted_ptp / measured_ptp,
-        tau_over_T_pct=100.0 * offsets.tau_s / period_s,
-        tau_1_s=offsets.tau_1_s,
-        tau_2_s=offsets.tau_2_s,
-        tau_s=offsets.tau_s,
-        nrmse=nrmse(predicted_arr, measured_arr),
-        predicted_ptp=predicted_ptp,
-        measured_ptp=measured_ptp,
-        period_s=period_s,
-        cycles=int(_cycle_bounds(time, period_s).size - 1),
-    )
 
 
 # --------------------------------------------------------------------------- segments
@@ -638,10 +313,19 @@ def steady_segments(
         SignalError: Bad input, a recording shorter than three periods, or no steady segment (the
             message says which condition failed).
     """
-    values, time = _as_same_length({"pressure": pressure, "time_s": time_s})
-    time = _as_time(time)
-    _check_positive(period_s, "period_s")
-    _check_positive(sample_rate_hz, "sample_rate_hz")
+    values, time = as_same_length({"pressure": pressure, "time_s": time_s})
+    time = as_time(time)
+    window = _steady_window(values.size, period_s, sample_rate_hz, settle_s, min_duration_s)
+    steady = _steady_samples(values, time, sample_rate_hz, period_s, window)
+    return _steady_runs(time, steady, period_s, settle_s, min_duration_s)
+
+
+def _steady_window(
+    samples: int, period_s: float, sample_rate_hz: float, settle_s: float, min_duration_s: float
+) -> int:
+    """Samples in one period; refuse bad settings or a recording shorter than 3 periods."""
+    check_positive(period_s, "period_s")
+    check_positive(sample_rate_hz, "sample_rate_hz")
     if settle_s < 0.0 or min_duration_s < 0.0:
         msg = f"settle_s and min_duration_s must be >= 0, got {settle_s}, {min_duration_s}."
         raise SignalError(msg)
@@ -649,13 +333,19 @@ def steady_segments(
     if window < 4:
         msg = f"A period of {period_s} s at {sample_rate_hz} Hz holds fewer than 4 samples."
         raise SignalError(msg)
-    if values.size < _MIN_SEGMENT_PERIODS * window:
+    if samples < _MIN_SEGMENT_PERIODS * window:
         msg = (
-            f"Recording of {values.size} samples is shorter than {_MIN_SEGMENT_PERIODS} "
+            f"Recording of {samples} samples is shorter than {_MIN_SEGMENT_PERIODS} "
             f"periods of {period_s} s: no steady segment can be found."
         )
         raise NoSteadyPulsingError(msg)
+    return window
 
+
+def _steady_samples(
+    values: FloatArray, time: FloatArray, sample_rate_hz: float, period_s: float, window: int
+) -> npt.NDArray[np.bool_]:
+    """Which samples are steady pulsing (the three conditions of :func:`steady_segments`)."""
     conditioned = lowpass(values, sample_rate_hz)
     conditioned = conditioned - np.median(conditioned)
     phase = 2.0 * np.pi * (time - time[0]) / period_s
@@ -686,8 +376,20 @@ def steady_segments(
             "mean (ramping throughout)."
         )
         raise NoSteadyPulsingError(msg)
-    steady = candidate & (amplitude >= _MIN_RELATIVE_AMPLITUDE * np.nanmax(amplitude[candidate]))
+    steady: npt.NDArray[np.bool_] = candidate & (
+        amplitude >= _MIN_RELATIVE_AMPLITUDE * np.nanmax(amplitude[candidate])
+    )
+    return steady
 
+
+def _steady_runs(
+    time: FloatArray,
+    steady: npt.NDArray[np.bool_],
+    period_s: float,
+    settle_s: float,
+    min_duration_s: float,
+) -> list[tuple[float, float]]:
+    """Each run of steady samples, settled and trimmed to whole periods, when long enough."""
     edges = np.diff(np.concatenate(([0], steady.astype(np.int8), [0])))
     run_starts = np.flatnonzero(edges == 1)
     run_ends = np.flatnonzero(edges == -1) - 1  # inclusive

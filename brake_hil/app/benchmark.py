@@ -33,9 +33,7 @@ from brake_hil.app.output import check_outputs, write_json
 from brake_hil.app.parallel import SERIAL, Outcome, Workers, parallel_map, values
 from brake_hil.diagnosis.diagnose import diagnose
 from brake_hil.errors import BrakeHilError
-from brake_hil.io.recording_reader import read_recording
-from brake_hil.physics.rig import load_rig
-from brake_hil.topics import MASTER_CYLINDER_PRESSURE, MEASURED_OUTPUTS
+from brake_hil.io.opened import open_recording
 
 CONFIDENCE_BINS = ((0.0, 0.5), (0.5, 0.7), (0.7, 0.8), (0.8, 0.9), (0.9, 0.95), (0.95, 1.01))
 INTERNAL_ERROR = "internal error"
@@ -69,11 +67,8 @@ def diagnose_case(case_dir: Path) -> CaseResult:
         return CaseResult(case_dir.name, (), 0.0, time.perf_counter() - began, {}, {}, error)
 
     try:
-        rig = load_rig(case_dir / "rig.yaml")
-        recording = read_recording(
-            case_dir / "recording", required=(MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS)
-        )
-        result = diagnose(recording, rig)
+        opened = open_recording(case_dir / "recording", case_dir / "rig.yaml")
+        result = diagnose(opened.recording, opened.rig)
     except BrakeHilError as err:
         return failed(str(err))
     except Exception as err:  # a bug of the diagnosis: this case's, the others still count

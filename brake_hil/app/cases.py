@@ -7,7 +7,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
@@ -23,20 +23,37 @@ from brake_hil.virtual_rig.cases import (
     write_labels,
 )
 
-__all__ = ["CasesResult", "generate_cases", "run_cases"]
+__all__ = ["CaseOptions", "CasesResult", "generate_cases", "run_cases"]
+
+
+@dataclass(frozen=True)
+class CaseOptions:
+    """What the cases are made of, besides their number and seed.
+
+    Attributes:
+        pulsing_s: seconds of 5 Hz pulsing per maximum pressure (5 s: 18 s recordings).
+        error_scale: multiplies the one-sigma tolerances the parameter errors are drawn from.
+        kinds: keep only cases of these kinds (null, single, pair, unexplained), numbered as
+            in the full schedule; the count is then the number kept (empty: every kind).
+        family: the family of truth laws (``a``, the registered laws, or ``b``; see
+            :mod:`brake_hil.virtual_rig.cases`).
+        drive: the pulsing frequency and maximum pressures (default: the paper's).
+    """
+
+    pulsing_s: float = 5.0
+    error_scale: float = 1.0
+    kinds: tuple[str, ...] = ()
+    family: str = "a"
+    drive: CaseDrive = SEED_DRIVE
 
 
 def generate_cases(
     out: Path | str,
     count: int,
     seed: int = 0,
+    options: CaseOptions = CaseOptions(),
     *,
-    pulsing_s: float = 5.0,
     workers: Workers = SERIAL,
-    error_scale: float = 1.0,
-    kinds: Sequence[str] = (),
-    family: str = "a",
-    drive: CaseDrive = SEED_DRIVE,
     progress: Callable[[int, int, int], None] | None = None,
 ) -> Path:
     """Write ``count`` labelled cases under ``out``; return the path of ``labels.json``.
@@ -44,16 +61,10 @@ def generate_cases(
     Args:
         out: a new or empty directory; gets ``cases/NNN/{recording/,rig.yaml}`` and
             ``labels.json``.
-        count: number of cases.
+        count: number of cases (with ``options.kinds``, the number kept).
         seed: seed of every draw (cases, strengths, parameter errors, sensor noise).
-        pulsing_s: seconds of 5 Hz pulsing per maximum pressure (5 s: 18 s recordings).
+        options: the pulsing, parameter errors, kinds, family and drive of the cases.
         workers: where the cases are simulated (:class:`~brake_hil.app.parallel.Workers`).
-        error_scale: multiplies the one-sigma tolerances the parameter errors are drawn from.
-        kinds: keep only cases of these kinds (null, single, pair, unexplained), numbered as
-            in the full schedule; ``count`` is then the number kept.
-        family: the family of truth laws (``a``, the registered laws, or ``b``; see
-            :mod:`brake_hil.virtual_rig.cases`).
-        drive: the pulsing frequency and maximum pressures (default: the seed's).
         progress: called with the number of cases written, failed and in all: once before
             the first is simulated, then as each finishes (in the order they finish).
 
@@ -66,7 +77,9 @@ def generate_cases(
     out = Path(out)
     if out.exists() and any(out.iterdir()):
         raise FileExistsError(f"{out}: not empty; choose a new directory for the cases")
-    specs = select_cases(count, seed, kinds, error_scale=error_scale, family=family)
+    specs = select_cases(
+        count, seed, options.kinds, error_scale=options.error_scale, family=options.family
+    )
     cases_dir = out / "cases"
     cases_dir.mkdir(parents=True, exist_ok=True)
 
@@ -81,7 +94,9 @@ def generate_cases(
 
     if progress is not None:
         progress(0, 0, len(specs))
-    simulate = partial(make_case, cases_dir=cases_dir, pulsing_s=pulsing_s, drive=drive)
+    simulate = partial(
+        make_case, cases_dir=cases_dir, pulsing_s=options.pulsing_s, drive=options.drive
+    )
     made = values(parallel_map(simulate, specs, workers, report))
     labels = {spec.case_id: label for spec, label in zip(specs, made)}
     return write_labels(
@@ -89,11 +104,11 @@ def generate_cases(
         labels,
         count=count,
         seed=seed,
-        pulsing_s=pulsing_s,
-        error_scale=error_scale,
-        kinds=kinds,
-        family=family,
-        drive=drive,
+        pulsing_s=options.pulsing_s,
+        error_scale=options.error_scale,
+        kinds=options.kinds,
+        family=options.family,
+        drive=options.drive,
     )
 
 
@@ -110,13 +125,9 @@ def run_cases(
     out: Path,
     count: int,
     seed: int = 0,
+    options: CaseOptions = CaseOptions(),
     *,
-    pulsing_s: float = 5.0,
     workers: Workers = SERIAL,
-    error_scale: float = 1.0,
-    kinds: Sequence[str] = (),
-    family: str = "a",
-    drive: CaseDrive = SEED_DRIVE,
     progress: Callable[[int, int, int], None] | None = None,
 ) -> CasesResult:
     """``brake-hil cases``: check the options, then :func:`generate_cases`.
@@ -125,13 +136,10 @@ def run_cases(
         out: a new or empty directory.
         count: number of cases (at least 1).
         seed: seed of every draw.
-        pulsing_s: seconds of 5 Hz pulsing per maximum pressure (above 0).
+        options: the cases' pulsing (above 0 s) and drive: the pulsing frequency (0.5-20 Hz)
+            and maximum pressures (2-5 of them, increasing, 0.3-10 MPa); their parameter
+            errors, kinds and family (see :class:`CaseOptions`).
         workers: where the cases are simulated.
-        error_scale: multiplies the one-sigma tolerances of the parameter errors.
-        kinds: keep only cases of these kinds (empty: every kind).
-        family: the family of truth laws, ``a`` or ``b``.
-        drive: the pulsing frequency (0.5-20 Hz) and maximum pressures (2-5 of them,
-            increasing, 0.3-10 MPa); default: the seed's.
         progress: called with the cases written, failed and in all (see
             :func:`generate_cases`).
 
@@ -141,9 +149,9 @@ def run_cases(
     Raises:
         BrakeHilError: a bad option, or ``out`` is not a new or empty directory.
     """
-    if count < 1 or pulsing_s <= 0.0:
+    if count < 1 or options.pulsing_s <= 0.0:
         raise BrakeHilError("cases: --count must be >= 1, --pulsing-seconds > 0")
-    hz, pressures = drive.excitation_hz, drive.max_pressures
+    hz, pressures = options.drive.excitation_hz, options.drive.max_pressures
     if hz is not None and not 0.5 <= hz <= 20.0:
         raise BrakeHilError(f"cases: --excitation-hz {hz:g} is outside 0.5-20 Hz")
     if not (
@@ -157,16 +165,5 @@ def run_cases(
         )
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise BrakeHilError(f"{out}: not empty; choose a new directory for the cases")
-    labels = generate_cases(
-        out,
-        count,
-        seed,
-        pulsing_s=pulsing_s,
-        workers=workers,
-        error_scale=error_scale,
-        kinds=kinds,
-        family=family,
-        drive=drive,
-        progress=progress,
-    )
+    labels = generate_cases(out, count, seed, options, workers=workers, progress=progress)
     return CasesResult(count, out / "cases", labels)

@@ -1,4 +1,4 @@
-"""``brake-hil characterize``: the seed's Table 3 (and Table 1) per steady segment."""
+"""``brake-hil characterize``: the paper's Table 3 (and Table 1) per steady segment."""
 
 from __future__ import annotations
 
@@ -8,9 +8,8 @@ from pathlib import Path
 from brake_hil.analysis.characterization import SegmentCharacterization, characterize
 from brake_hil.app.naming import naming
 from brake_hil.app.output import check_outputs, write_json
-from brake_hil.io.recording_reader import read_recording
-from brake_hil.physics.rig import Rig, load_rig
-from brake_hil.topics import MASTER_CYLINDER_PRESSURE, MEASURED_OUTPUTS
+from brake_hil.io.opened import open_recording
+from brake_hil.physics.rig import Rig
 
 __all__ = ["CharacterizeResult", "run_characterize"]
 
@@ -44,10 +43,8 @@ def run_characterize(
         BrakeHilError: a bad rig file or recording, or no steady pulsing.
     """
     check_outputs(json_path)
-    rig = load_rig(rig_path)
-    recording = read_recording(
-        recording_path, required=(MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS)
-    )
+    opened = open_recording(recording_path, rig_path)
+    recording, rig = opened.recording, opened.rig
     with naming(recording_path):
         segments = tuple(characterize(recording, rig))
     document: dict[str, object] = {

@@ -8,9 +8,8 @@ from pathlib import Path
 from brake_hil.analysis.comparison import Comparison, compare
 from brake_hil.app.naming import naming
 from brake_hil.app.output import check_outputs, write_json
-from brake_hil.io.recording_reader import read_recording
-from brake_hil.physics.rig import Rig, load_rig
-from brake_hil.topics import MASTER_CYLINDER_PRESSURE, MEASURED_OUTPUTS
+from brake_hil.io.opened import open_recording
+from brake_hil.physics.rig import Rig
 
 __all__ = ["CompareResult", "run_compare"]
 
@@ -50,10 +49,8 @@ def run_compare(
             the file).
     """
     check_outputs(json_path, plot_path)
-    rig = load_rig(rig_path)
-    recording = read_recording(
-        recording_path, required=(MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS)
-    )
+    opened = open_recording(recording_path, rig_path)
+    recording, rig = opened.recording, opened.rig
     with naming(recording_path):
         comparison = compare(recording, rig)
     document = {"recording": str(recording_path), "rig": str(rig_path), **comparison.as_dict()}

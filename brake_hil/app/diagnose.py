@@ -10,9 +10,7 @@ from brake_hil.app.output import check_outputs, write_json
 from brake_hil.diagnosis.candidates import CANDIDATES
 from brake_hil.diagnosis.diagnose import PAIR_SHORTLIST, Diagnosis, Progress, diagnose
 from brake_hil.files import output_file
-from brake_hil.io.recording_reader import read_recording
-from brake_hil.physics.rig import load_rig
-from brake_hil.topics import MASTER_CYLINDER_PRESSURE, MEASURED_OUTPUTS
+from brake_hil.io.opened import open_recording
 
 __all__ = ["DIAGNOSE_FILES", "DIAGNOSIS_STEPS", "DiagnoseResult", "run_diagnose"]
 
@@ -53,10 +51,8 @@ def run_diagnose(
     from brake_hil.report.diagnosis_report import REPORT_FILES, write_report
 
     check_outputs(folder=out, names=(*DIAGNOSE_FILES, *REPORT_FILES))
-    rig = load_rig(rig_path)
-    recording = read_recording(
-        recording_path, required=(MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS)
-    )
+    opened = open_recording(recording_path, rig_path)
+    recording, rig = opened.recording, opened.rig
     with naming(recording_path):
         diagnosis = diagnose(recording, rig, progress)
     json_path = output_file(out, "diagnosis.json")

@@ -15,6 +15,7 @@ import os
 from pathlib import Path
 
 from brake_hil.errors import BrakeHilError
+from brake_hil.io.recording_paths import RECORDING_SUFFIXES, recording_name, rig_beside
 
 __all__ = [
     "RECORDING_SUFFIXES",
@@ -26,8 +27,6 @@ __all__ = [
     "rig_beside",
 ]
 
-RECORDING_SUFFIXES = (".mcap", ".db3")
-"""Suffixes of the files a rosbag2 recording is stored in."""
 _GLOB_CHARACTERS = frozenset("*?[")
 
 
@@ -114,28 +113,6 @@ def names_many(patterns: Sequence[Path | str]) -> bool:
     if not path.exists():
         return bool(_GLOB_CHARACTERS & set(str(patterns[0])))
     return path.is_dir() and not is_recording(path) and bool(_below(path))
-
-
-def rig_beside(recording: Path) -> Path:
-    """``RECORDING.rig.yaml`` beside a recording (a bag folder or a bare ``.mcap``/``.db3``).
-
-    Raises:
-        BrakeHilError: no such file (the message says to pass ``--rig``).
-    """
-    base = Path(str(recording).rstrip("/"))
-    candidates = [base.parent / f"{base.name}.rig.yaml"]
-    if base.suffix in RECORDING_SUFFIXES:
-        candidates.append(base.with_suffix(".rig.yaml"))
-    for path in candidates:
-        if path.is_file():
-            return path
-    raise BrakeHilError(f"{recording}: no rig file beside it ({candidates[0]}); pass --rig")
-
-
-def recording_name(recording: Path) -> str:
-    """A recording's name: its folder's, or its file's without the suffix."""
-    base = Path(str(recording).rstrip("/"))
-    return base.stem if base.suffix in RECORDING_SUFFIXES else base.name
 
 
 def mirrored_folder(recording: Path, recordings: Sequence[Path], out: Path) -> Path:

@@ -6,7 +6,7 @@ time, are compared with a stored baseline (ROS-free).
 The scoring is the comparator node's (:mod:`brake_hil.analysis.stamp_scoring`), so the node
 and this command agree: the live model steps on raw ``p_i``; its output and the measurements
 are low-passed alike (the model is linear, so filtering its output equals filtering its
-input) and compared with the seed's Table 4-5 metrics over the steady 5 Hz cycles, which match
+input) and compared with the paper's Table 4-5 metrics over the steady 5 Hz cycles, which match
 ``brake-hil compare`` up to the filter's edge effects and the operating point (``compare``
 derives the model at each segment's own mean pressure, the live model at one).
 

@@ -1,4 +1,4 @@
-"""``brake-hil simulate``: a recording of the seed's LTI model, or of the virtual rig.
+"""``brake-hil simulate``: a recording of the paper's LTI model, or of the virtual rig.
 
 :func:`run_simulate` writes the LTI model's answer with the DAQ's noise and quantisation;
 :func:`run_virtual_simulate` integrates the virtual rig (the truth rig with effects) and
@@ -68,7 +68,7 @@ class LtiSimulation:
 def run_simulate(
     rig_path: Path, out: Path, max_pressures: Sequence[float], pulsing_s: float, seed: int
 ) -> LtiSimulation:
-    """Write the LTI model's recording of the seed's pulsing with the DAQ's noise.
+    """Write the LTI model's recording of the paper's pulsing with the DAQ's noise.
 
     Args:
         rig_path: the rig YAML.

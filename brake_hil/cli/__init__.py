@@ -1,8 +1,10 @@
-"""``brake-hil``: the command line of interface.md.
+"""``brake-hil``: the command line of docs/interface.md.
 
 The work of each sub-command is a function of :mod:`brake_hil.app` that returns its result
-and prints nothing; this package parses the arguments (:mod:`.parser`), prints the results
-and progress (:mod:`.commands`) and sets the exit status. Bad input (a missing file, a
+and prints nothing. Each sub-command is a verb (:mod:`.verb`), one module per command or
+small group in :mod:`.verbs`: its arguments, and its ``main`` that calls the app function,
+prints the result and progress and returns the exit status. The parser (:mod:`.parser`) and
+the dispatch below are derived from the registered verbs. Bad input (a missing file, a
 corrupt bag, a missing topic, NaN samples, stamps going backwards, a bad rig key) ends with
 one line on stderr naming the file and the problem, and exit status 2.
 :mod:`.chain` is the command line of the node-chain launcher
@@ -16,8 +18,8 @@ from collections.abc import Sequence
 import logging
 import sys
 
-from brake_hil.cli import commands
-from brake_hil.cli.parser import build_parser, uses_virtual_rig
+from brake_hil.cli.parser import build_parser
+from brake_hil.cli.verbs import VERBS
 from brake_hil.errors import BrakeHilError
 
 __all__ = ["EXIT_BAD_INPUT", "build_parser", "main"]
@@ -75,20 +77,5 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
-    """The sub-command ``args.command``; its exit status."""
-    if args.command == "simulate":
-        if uses_virtual_rig(args):
-            return commands.simulate_virtual(args)
-        return commands.simulate_lti(args)
-    run = {
-        "compare": commands.compare,
-        "characterize": commands.characterize,
-        "diagnose": commands.diagnose,
-        "cases": commands.cases,
-        "benchmark": commands.benchmark,
-        "regress": commands.regress,
-        "recover": commands.recover,
-        "fleet": commands.fleet,
-        "trend": commands.trend,
-    }.get(args.command)
-    return run(args) if run is not None else 0
+    """The verb ``args.command``; its exit status."""
+    return VERBS[args.command]().main(args)

@@ -30,7 +30,7 @@ def add_workers_arguments(parser: argparse.ArgumentParser) -> None:
         "--jobs",
         type=int,
         metavar="N",
-        help="worker processes of a Dask LocalCluster started on this machine, on loopback "
+        help="worker processes of a Dask LocalCluster started on this computer, on loopback "
         "(default: one per core)",
     )
     choice.add_argument(

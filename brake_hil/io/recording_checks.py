@@ -122,8 +122,13 @@ def _storage_files(path: Path, info: Mapping[str, object]) -> list[Path]:
     return [path / name for name in names]
 
 
-def check_recording_path(path: Path) -> None:
+def check_recording_path(path: Path) -> Mapping[str, object] | None:
     """Refuse a path no reader should open (module docstring); quick, reads no messages.
+
+    Returns:
+        A bag folder's ``rosbag2_bagfile_information`` (its ``metadata.yaml``, read through
+        the strict YAML door) so the reader need not read it again; ``None`` for a file, a
+        missing path or a folder without ``metadata.yaml``.
 
     Raises:
         RecordingError: not a regular file or folder, an irregular or missing file in a bag
@@ -132,7 +137,7 @@ def check_recording_path(path: Path) -> None:
     try:
         mode = os.stat(path).st_mode
     except FileNotFoundError:
-        return  # the reader names a missing path itself
+        return None  # the reader names a missing path itself
     except OSError as err:
         raise _fail(path, f"cannot read the recording: {err.strerror or err}") from err
     if not (stat.S_ISDIR(mode) or stat.S_ISREG(mode)):
@@ -140,14 +145,15 @@ def check_recording_path(path: Path) -> None:
         raise _fail(path, f"is {kind}, not a recording (only regular files and folders)")
     if stat.S_ISREG(mode):
         check_input_file(path, "recording", MAX_RECORDING_BYTES, RecordingError)
-        return
+        return None
     try:
         names = sorted(os.listdir(path))
     except OSError as err:
         raise _fail(path, f"cannot list the recording folder: {err.strerror or err}") from err
     if "metadata.yaml" not in names:
-        return  # the reader explains what a bag folder needs
-    files = _storage_files(path, _metadata(path))
+        return None  # the reader explains what a bag folder needs
+    info = _metadata(path)
+    files = _storage_files(path, info)
     total = 0
     for file in files:
         total += check_input_file(file, "storage file", MAX_RECORDING_BYTES, RecordingError)
@@ -155,6 +161,7 @@ def check_recording_path(path: Path) -> None:
         raise _fail(
             path, f"{total} bytes of storage files, more than the limit of {MAX_RECORDING_BYTES}"
         )
+    return info
 
 
 def unsupported_format(path: Path) -> str | None:

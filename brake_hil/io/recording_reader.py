@@ -1,6 +1,6 @@
 """Read a rig recording into a :class:`~brake_hil.analysis.recording.Recording`.
 
-Accepted (interface.md, "Recordings"): a rosbag2 directory (``metadata.yaml`` with one or
+Accepted (docs/interface.md, "Recordings"): a rosbag2 directory (``metadata.yaml`` with one or
 more ``.mcap`` or ``.db3`` files), a bare ``.mcap`` file and a bare ``.db3`` file. rosbags'
 ``Reader`` yields raw CDR bytes, so only the brake topics are decoded, by
 :mod:`brake_hil.io.stamped_cdr`; unrelated topics, unknown types and service events are
@@ -91,20 +91,25 @@ def _one_line(err: BaseException) -> str:
     return text.rstrip(".")
 
 
-def _check_path(path: Path) -> None:
-    """Refuse a path that cannot hold a recording, before any library sees it."""
-    check_recording_path(path)
+def _check_path(path: Path) -> Mapping[str, object] | None:
+    """Refuse a path that cannot hold a recording, before any library sees it.
+
+    Returns:
+        The bag folder's metadata (:func:`~brake_hil.io.recording_checks.check_recording_path`).
+    """
+    info = check_recording_path(path)
     if not path.exists():
         missing = FileNotFoundError(errno.ENOENT, os.strerror(errno.ENOENT), str(path))
         raise _fail(path, "no such file or directory") from missing
     if path.is_dir():
         if (path / "metadata.yaml").is_file() or any(path.glob("*.mcap")):
-            return  # without metadata.yaml: an unfinished recording (io.unfinished)
+            return info  # without metadata.yaml: an unfinished recording (io.unfinished)
         found = sorted(p.name for p in path.iterdir() if p.suffix in _BAG_SUFFIXES)
         hint = f"; pass the storage file itself ({', '.join(found)})" if found else ""
         raise _fail(path, f"not a rosbag2 directory: no metadata.yaml{hint}")
     if path.suffix not in _BAG_SUFFIXES:
         raise _fail(path, "not a recording: expected a rosbag2 directory, a .mcap or a .db3 file")
+    return info
 
 
 def _open(path: Path) -> Reader:
@@ -113,8 +118,8 @@ def _open(path: Path) -> Reader:
     An unfinished MCAP recording is read by streaming its whole chunks instead
     (:func:`~brake_hil.io.unfinished.open_unfinished`, one line on stderr).
     """
-    _check_path(path)
-    if (salvaged := open_unfinished(path)) is not None:
+    info = _check_path(path)
+    if (salvaged := open_unfinished(path, info)) is not None:
         return cast(Reader, salvaged)  # answers topics, messages and close as Reader does
     try:
         reader = Reader(path)

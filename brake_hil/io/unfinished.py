@@ -13,7 +13,7 @@ reader and every command work on what was recovered.
 
 from __future__ import annotations
 
-from collections.abc import Collection, Iterator, Sequence
+from collections.abc import Collection, Iterator, Mapping, Sequence
 from itertools import groupby
 import logging
 from pathlib import Path
@@ -57,23 +57,24 @@ def bag_metadata(path: Path) -> dict[str, Any] | None:
     return info if isinstance(info, dict) else None
 
 
-def storage_files(path: Path) -> list[Path]:
+def storage_files(path: Path, info: Mapping[str, Any] | None = None) -> list[Path]:
     """The ``.mcap`` files of a recording in recording order.
 
     A file is itself; for a directory the files ``metadata.yaml`` lists (those that exist),
-    then any other ``.mcap`` file by its ``_<index>`` suffix.
+    then any other ``.mcap`` file by its ``_<index>`` suffix. ``info``: the directory's
+    metadata when read already (default: read here, :func:`bag_metadata`).
     """
     if not path.is_dir():
         return [path]
     listed: list[Path] = []
-    if (info := bag_metadata(path)) is not None:
+    if (info := info if info is not None else bag_metadata(path)) is not None:
         names = info.get("relative_file_paths") or []
         listed = [path / Path(str(n)).name for n in names if str(n).endswith(".mcap")]
     present = sorted(path.glob("*.mcap"), key=_file_order)
     return [p for p in listed if p.exists()] + [p for p in present if p not in listed]
 
 
-def _metadata_counts(info: dict[str, Any]) -> dict[str, int] | None:
+def _metadata_counts(info: Mapping[str, Any]) -> dict[str, int] | None:
     try:
         return {
             str(t["topic_metadata"]["name"]): int(t["message_count"])
@@ -105,12 +106,13 @@ def _starts_as_mcap(path: Path) -> bool:
         return stream.read(len(MAGIC)) == MAGIC
 
 
-def unfinished_reason(path: Path) -> str | None:
+def unfinished_reason(path: Path, info: Mapping[str, Any] | None = None) -> str | None:
     """Why a recording counts as unfinished (see the module doc); None when it does not.
 
     Only MCAP storage is judged: a ``.db3`` file or an sqlite3 bag is never unfinished here,
     and a directory whose ``metadata.yaml`` lists a missing file is left to the normal reader
-    (it refuses it).
+    (it refuses it). ``info``: the directory's metadata when read already (default: read
+    here, :func:`bag_metadata`).
     """
     if path.is_file():
         if path.suffix != ".mcap" or not _starts_as_mcap(path):
@@ -121,7 +123,7 @@ def unfinished_reason(path: Path) -> str | None:
         return None
     if not (path / "metadata.yaml").exists():
         return "no metadata.yaml"
-    if (info := bag_metadata(path)) is None:
+    if (info := info if info is not None else bag_metadata(path)) is None:
         return "metadata.yaml is unreadable"
     if info.get("storage_identifier", "mcap") != "mcap":
         return None
@@ -275,14 +277,16 @@ class SalvagedRecording:
         )
 
 
-def salvage_recording(path: Path, reason: str) -> SalvagedRecording:
-    """Read every whole chunk of every ``.mcap`` file of ``path``.
+def salvage_recording(
+    path: Path, reason: str, info: Mapping[str, Any] | None = None
+) -> SalvagedRecording:
+    """Read every whole chunk of every ``.mcap`` file of ``path`` (``info``: its metadata).
 
     Raises:
         RecordingError: a file cannot be read, or not one message could be recovered.
     """
     try:
-        files = [salvage_file(file) for file in storage_files(path)]
+        files = [salvage_file(file) for file in storage_files(path, info)]
     except OSError as err:
         raise RecordingError(f"{path}: cannot read the recording: {err}") from err
     recording = SalvagedRecording(path, files, reason)
@@ -295,8 +299,11 @@ def salvage_recording(path: Path, reason: str) -> SalvagedRecording:
     return recording
 
 
-def open_unfinished(path: Path) -> SalvagedRecording | None:
+def open_unfinished(path: Path, info: Mapping[str, Any] | None = None) -> SalvagedRecording | None:
     """The recovered messages of an unfinished recording, None when ``path`` is finished.
+
+    ``info`` is the directory's ``metadata.yaml`` when the caller has read it already
+    (:func:`~brake_hil.io.recording_checks.check_recording_path`); default: read here.
 
     Logs one line on ``brake_hil.recording`` (stderr when logging is not configured): the
     recording was unfinished, how many messages were recovered, what was cut; the record's
@@ -306,12 +313,12 @@ def open_unfinished(path: Path) -> SalvagedRecording | None:
         RecordingError: unfinished and nothing could be recovered, or unreadable.
     """
     try:
-        reason = unfinished_reason(path)
+        reason = unfinished_reason(path, info)
     except OSError as err:
         raise RecordingError(f"{path}: cannot read the recording: {err}") from err
     if reason is None:
         return None
-    recording = salvage_recording(path, reason)
+    recording = salvage_recording(path, reason, info)
     brief = (
         f"read from an unfinished recording: {recording.message_count} messages recovered "
         "from its whole chunks"

@@ -14,8 +14,10 @@ Conventions this project chose where the printed equations are ambiguous (physic
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 import math
+from typing import Final
 
 from brake_hil.physics.rig import Line, Rig
 
@@ -156,7 +158,7 @@ def chamber_volumes(rig: Rig) -> tuple[float, float]:
 def derive_parameters(rig: Rig, mean_pressure: float = DEFAULT_MEAN_PRESSURE) -> ModelParameters:
     """All LTI-model coefficients from a rig at a mean master-cylinder pressure (Pa).
 
-    Values in the rig's ``model:`` mapping replace the derived ones (interface.md).
+    Values in the rig's ``model:`` mapping replace the derived ones (docs/interface.md).
     """
     seal = seal_properties(rig)
     area_ep = piston_area(rig)
@@ -195,30 +197,29 @@ def derive_parameters(rig: Rig, mean_pressure: float = DEFAULT_MEAN_PRESSURE) ->
     return apply_overrides(params, rig)
 
 
+MODEL_OVERRIDES: Final[Mapping[str, str]] = {
+    "k_eh": "effective_hydraulic_stiffness",
+    "c_eh": "effective_hydraulic_damping",
+    "C_b": "bore_compliance",
+    "C_i": "master_compliance",
+    "R_line": "line_resistance",
+    "I_line": "line_inertance",
+    "k_c": "caliper_stiffness",
+    "k_k": "block_stiffness",
+}
+"""The keys of a rig file's ``model:`` mapping that replace a model parameter outright, and
+the :class:`ModelParameters` field each sets (``R_v`` and ``A_eb_over_A_ep`` are combined
+with derived values: :func:`apply_overrides`)."""
+
+
 def apply_overrides(params: ModelParameters, rig: Rig) -> ModelParameters:
     """Apply the rig file's ``model:`` mapping (``k_eh``, ``c_eh``, ``C_b``, ``R_v``, ...)."""
     o = rig.model_overrides
-    changes: dict[str, float] = {}
-    if "k_eh" in o:
-        changes["effective_hydraulic_stiffness"] = o["k_eh"]
-    if "c_eh" in o:
-        changes["effective_hydraulic_damping"] = o["c_eh"]
-    if "C_b" in o:
-        changes["bore_compliance"] = o["C_b"]
-    if "C_i" in o:
-        changes["master_compliance"] = o["C_i"]
-    if "R_v" in o:
+    changes = {field: o[key] for key, field in MODEL_OVERRIDES.items() if key in o}
+    if "R_v" in o and "R_line" not in o:  # the needle valve's share of the line resistance
         changes["line_resistance"] = (
             params.line_resistance - rig.needle_valve_resistance + o["R_v"]
         )
-    if "R_line" in o:
-        changes["line_resistance"] = o["R_line"]
-    if "I_line" in o:
-        changes["line_inertance"] = o["I_line"]
-    if "k_c" in o:
-        changes["caliper_stiffness"] = o["k_c"]
-    if "k_k" in o:
-        changes["block_stiffness"] = o["k_k"]
     if "A_eb_over_A_ep" in o:
         changes["bore_area"] = o["A_eb_over_A_ep"] * params.piston_area
     return params.with_changes(**changes) if changes else params

@@ -1,4 +1,4 @@
-"""Rig description: the YAML of interface.md, loaded and checked once at the door.
+"""Rig description: the YAML of docs/interface.md, loaded and checked once at the door.
 
 Every value is SI. A key that is unknown, missing, of the wrong type or of an implausible
 magnitude (a negative mass, a 40 m piston) is refused with a `RigError` naming the file and
@@ -188,7 +188,7 @@ class Rig:
     source: str = "<memory>"
 
     def tolerance(self, dotted_key: str) -> float:
-        """Relative one-sigma uncertainty of a value by its dotted key (interface.md)."""
+        """Relative one-sigma uncertainty of a value by its dotted key (docs/interface.md)."""
         if dotted_key in self.tolerances:
             return self.tolerances[dotted_key]
         return DEFAULT_TOLERANCES.get(dotted_key, DEFAULT_TOLERANCE)

@@ -15,7 +15,7 @@ path, or ``sqlite:///path``; the default, beside the outputs), or a PostgreSQL s
 * ``calibration``: a diagnosis's calibrated multipliers (over the rig file's value, 1 =
   nominal) with their prior (the rig file's tolerance) and posterior log-sigmas, and the
   improved model's multiplier of the same value;
-* ``metrics``: the seed's Table 4-5 metrics per model (``baseline``, ``improved``,
+* ``metrics``: the paper's Table 4-5 metrics per model (``baseline``, ``improved``,
   ``model``) and channel;
 * ``effects``: a diagnosis's hypotheses: held-out improvement, score, whether the verdict
   names them, fitted parameters (JSON).
@@ -26,31 +26,39 @@ metrics. Several processes may append at once: an SQLite file is in WAL mode and
 waits up to :data:`BUSY_TIMEOUT_S` for another's transaction; on PostgreSQL two writers of
 the same run key take turns on the key's advisory lock, others write side by side. A
 database that is not ours (no ``meta`` of this application) or of a newer schema is refused.
+
+The schema and that check are in :mod:`.schema`, the documents' checks in :mod:`.documents`,
+the rows read back in :mod:`.rows`.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 from datetime import UTC, datetime
 import json
-import math
 from pathlib import Path
 from types import TracebackType
-from typing import Any, Final
+from typing import Any
 
 from brake_hil import __version__
 from brake_hil.analysis.comparison import SUMMARY_KEYS
 from brake_hil.errors import BrakeHilError
-from brake_hil.results.backends import (
-    BUSY_TIMEOUT_S,
-    Database,
-    database_path,
-    enforce_foreign_keys,
-    open_database,
-    set_wal,
+from brake_hil.results.backends import BUSY_TIMEOUT_S, Database, database_path, open_database
+from brake_hil.results.documents import (
+    KeyRefusedError,
+    check_diagnosis,
+    check_metrics,
+    checked_mapping,
 )
 from brake_hil.results.identity import RecordingIdentity, identify_loosely
+from brake_hil.results.rows import (
+    CalibrationValue,
+    DiagnosisRow,
+    FailedRun,
+    HypothesisRow,
+    Metrics,
+)
+from brake_hil.results.schema import APPLICATION, KINDS, SCHEMA_VERSION, TABLES, one_line, prepare
 
 __all__ = [
     "APPLICATION",
@@ -61,137 +69,11 @@ __all__ = [
     "DiagnosisRow",
     "FailedRun",
     "HypothesisRow",
+    "Metrics",
     "ResultsStore",
     "database_path",
     "open_store",
 ]
-
-APPLICATION: Final = "brake_hil results"
-"""``meta.application`` of a results database: a file without it is not ours."""
-SCHEMA_VERSION: Final = 1
-"""``meta.schema_version`` this module writes and reads."""
-KINDS: Final = ("diagnosis", "regression", "comparison")
-"""The commands whose results are stored."""
-
-_SCHEMA: Final = """
-CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
-CREATE TABLE IF NOT EXISTS recordings (
-    content_hash TEXT PRIMARY KEY,
-    path TEXT NOT NULL,
-    start_ns {int64},
-    end_ns {int64},
-    duration_s {real}
-);
-CREATE TABLE IF NOT EXISTS runs (
-    id {id},
-    kind TEXT NOT NULL CHECK (kind IN ('diagnosis', 'regression', 'comparison')),
-    recording_hash TEXT NOT NULL REFERENCES recordings (content_hash),
-    rig_name TEXT NOT NULL,
-    rig_hash TEXT NOT NULL,
-    rig_path TEXT NOT NULL,
-    tool_version TEXT NOT NULL,
-    written_at TEXT NOT NULL,
-    status TEXT NOT NULL CHECK (status IN ('ok', 'failed')),
-    error TEXT,
-    effects TEXT,
-    confidence {real},
-    explanation TEXT,
-    UNIQUE (kind, recording_hash, rig_hash, tool_version)
-);
-CREATE INDEX IF NOT EXISTS runs_by_rig ON runs (kind, rig_name);
-CREATE TABLE IF NOT EXISTS calibration (
-    {seq}
-    run {int64} NOT NULL REFERENCES runs (id) ON DELETE CASCADE,
-    name TEXT NOT NULL,
-    multiplier {real} NOT NULL,
-    prior_sigma {real} NOT NULL,
-    posterior_sigma {real} NOT NULL,
-    improved_multiplier {real},
-    PRIMARY KEY (run, name)
-);
-CREATE TABLE IF NOT EXISTS metrics (
-    {seq}
-    run {int64} NOT NULL REFERENCES runs (id) ON DELETE CASCADE,
-    model TEXT NOT NULL,
-    channel TEXT NOT NULL,
-    ptp_ratio_pct {real} NOT NULL,
-    tau_over_T_pct {real} NOT NULL,
-    nrmse {real} NOT NULL,
-    PRIMARY KEY (run, model, channel)
-);
-CREATE TABLE IF NOT EXISTS effects (
-    {seq}
-    run {int64} NOT NULL REFERENCES runs (id) ON DELETE CASCADE,
-    effect TEXT NOT NULL,
-    named INTEGER NOT NULL CHECK (named IN (0, 1)),
-    held_out_improvement {real} NOT NULL,
-    score {real} NOT NULL,
-    parameters TEXT NOT NULL,
-    PRIMARY KEY (run, effect)
-);
-"""
-_DIAGNOSIS_MODELS: Final = ("baseline", "improved")
-_TABLES: Final = ("meta", "recordings", "runs", "calibration", "metrics", "effects")
-
-Metrics = Mapping[str, Mapping[str, Mapping[str, float]]]
-"""Model name -> channel -> metric -> value (the seed's Table 4-5 metrics)."""
-
-
-@dataclass(frozen=True)
-class CalibrationValue:
-    """One calibrated rig value of a diagnosis."""
-
-    name: str  # e.g. caliper_stiffness
-    multiplier: float  # calibrated LTI model's value over the rig file's (1 = nominal)
-    prior_sigma: float  # the rig file's tolerance (log-sigma)
-    posterior_sigma: float  # after the data (log-sigma; inf: not identified at all)
-    improved_multiplier: float | None  # the improved model's value over the rig file's
-
-
-@dataclass(frozen=True)
-class HypothesisRow:
-    """One hypothesis a diagnosis fitted: an effect or a pair (``a+b``)."""
-
-    effect: str
-    named: bool  # every effect of it is in the verdict
-    held_out_improvement: float  # held-out mean squared error, baseline over hypothesis
-    score: float  # log improvement less a charge per parameter
-    parameters: Mapping[str, float]  # fitted, SI units
-
-
-@dataclass(frozen=True)
-class DiagnosisRow:
-    """One stored diagnosis: the recording, the rig file, the verdict and its numbers."""
-
-    run_id: int
-    recording_path: str
-    recording_hash: str
-    start_ns: int | None  # first log time (ns since the epoch)
-    end_ns: int | None  # last log time (ns since the epoch)
-    rig_name: str
-    rig_hash: str
-    rig_path: str
-    tool_version: str
-    written_at: str  # ISO 8601, UTC
-    effects: tuple[str, ...]  # the verdict
-    confidence: float  # 0-1
-    explanation: str
-    calibration: tuple[CalibrationValue, ...]
-    hypotheses: tuple[HypothesisRow, ...]
-    metrics: Metrics  # model (baseline, improved) -> channel -> metric -> value
-
-
-@dataclass(frozen=True)
-class FailedRun:
-    """A command that failed on a recording: stored so, never as a result."""
-
-    run_id: int
-    kind: str
-    recording_path: str
-    rig_name: str
-    tool_version: str
-    written_at: str  # ISO 8601, UTC
-    error: str  # its one line
 
 
 # --------------------------------------------------------------------------- the door
@@ -214,222 +96,16 @@ def open_store(url_or_path: str | Path, *, create: bool = True) -> ResultsStore:
     """
     database = open_database(url_or_path, create=create)
     try:
-        _prepare(database, create)
+        prepare(database, create)
     except BaseException:
         database.close()
         raise
     return ResultsStore(database)
 
 
-def _prepare(database: Database, create: bool) -> None:
-    """Check the database is a results database of this schema (make it so when new)."""
-    try:
-        tables = database.tables()
-        if not tables:
-            if not create:
-                raise BrakeHilError(f"{database.name}: an empty database, no results in it")
-            set_wal(database)
-            _create_schema(database)
-            tables = database.tables()
-        _check_ours(database, tables)
-        enforce_foreign_keys(database)
-    except database.errors as err:
-        raise BrakeHilError(
-            f"{database.name}: not a usable results database: {_one_line(str(err))}"
-        ) from err
-
-
-def _create_schema(database: Database) -> None:
-    """The tables and ``meta``, in one transaction (another process may be making them too)."""
-    with database.transaction() as db:
-        db.lock(APPLICATION)
-        for statement in db.dialect.schema(_SCHEMA):
-            db.execute(statement)
-        db.execute(
-            "INSERT INTO meta (key, value) VALUES (?, ?), (?, ?) ON CONFLICT DO NOTHING",
-            ("application", APPLICATION, "schema_version", str(SCHEMA_VERSION)),
-        )
-
-
-def _check_ours(database: Database, tables: set[str]) -> None:
-    name = database.name
-    if "meta" not in tables:
-        shown = ", ".join(sorted(tables))
-        raise BrakeHilError(f"{name}: not a brake_hil results database (its tables: {shown})")
-    meta = {str(key): value for key, value in database.execute("SELECT key, value FROM meta")}
-    if meta.get("application") != APPLICATION:
-        raise BrakeHilError(f"{name}: not a brake_hil results database (a meta table of another)")
-    version = str(meta.get("schema_version", ""))
-    if version != str(SCHEMA_VERSION):
-        newer = version.isdigit() and int(version) > SCHEMA_VERSION
-        raise BrakeHilError(
-            f"{name}: results schema {version or '?'}, this brake_hil reads {SCHEMA_VERSION}"
-            + (" (written by a newer brake_hil)" if newer else "")
-        )
-    if missing := [t for t in _TABLES if t not in tables]:
-        raise BrakeHilError(f"{name}: results database without table {', '.join(missing)}")
-
-
-# --------------------------------------------------------------------------- checks
-
-
-class _KeyRefusedError(BrakeHilError, ValueError):
-    """A key of a document is missing or its value refused (the caller names the document)."""
-
-    def __init__(self, key: str, problem: str) -> None:
-        super().__init__(f"{key}: {problem}")
-
-
-def _refuse(key: str, problem: str) -> _KeyRefusedError:
-    return _KeyRefusedError(key, problem)
-
-
-def _mapping(value: object, key: str) -> Mapping[str, Any]:
-    if not isinstance(value, Mapping) or not all(isinstance(k, str) for k in value):
-        raise _refuse(key, "missing or not a mapping")
-    return value
-
-
-def _number(value: object, key: str, *, positive: bool = False, infinite: bool = False) -> float:
-    """A finite float (or +inf with ``infinite``), above 0 with ``positive``."""
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise _refuse(key, f"missing or not a number ({value!r})")
-    try:
-        number = float(value)
-    except OverflowError:
-        raise _refuse(key, "not a finite number (too large)") from None
-    if math.isnan(number) or (math.isinf(number) and not (infinite and number > 0)):
-        raise _refuse(key, f"not a finite number ({number})")
-    if positive and number <= 0:
-        raise _refuse(key, f"must be above 0 ({number})")
-    return number
-
-
-def _numbers(value: object, key: str) -> dict[str, float]:
-    return {name: _number(v, f"{key}.{name}") for name, v in _mapping(value, key).items()}
-
-
-def check_metrics(metrics: object, key: str = "metrics") -> dict[str, dict[str, float]]:
-    """Channel -> the seed's three metrics (finite); other metrics are not kept.
-
-    Raises:
-        BrakeHilError: a channel without one of them, or a value not finite (the message
-            starts with the key, e.g. ``metrics.F_k.nrmse``).
-    """
-    channels = _mapping(metrics, key)
-    if not channels:
-        raise _refuse(key, "no channel")
-    checked: dict[str, dict[str, float]] = {}
-    for channel, values in channels.items():
-        row = _mapping(values, f"{key}.{channel}")
-        checked[channel] = {m: _number(row.get(m), f"{key}.{channel}.{m}") for m in SUMMARY_KEYS}
-    return checked
-
-
-@dataclass(frozen=True)
-class _Diagnosis:
-    """What a diagnosis document holds that the store keeps, checked."""
-
-    effects: tuple[str, ...]
-    confidence: float
-    explanation: str
-    calibration: tuple[CalibrationValue, ...]
-    hypotheses: tuple[HypothesisRow, ...]
-    metrics: dict[str, dict[str, dict[str, float]]]
-
-
-def check_diagnosis(document: Mapping[str, Any]) -> _Diagnosis:
-    """The stored parts of a ``diagnosis.json`` document, each checked.
-
-    Raises:
-        BrakeHilError: a missing key or a value of the wrong type, not finite (a confidence
-            outside 0-1, a multiplier or improvement not above 0); the message starts with
-            the key (e.g. ``verdict.confidence``).
-    """
-    top = _mapping(document, "document")
-    verdict = _mapping(top.get("verdict"), "verdict")
-    effects = verdict.get("effects")
-    if not isinstance(effects, list | tuple) or not all(isinstance(e, str) for e in effects):
-        raise _refuse("verdict.effects", "missing or not a list of effect names")
-    confidence = _number(verdict.get("confidence"), "verdict.confidence")
-    if not 0.0 <= confidence <= 1.0:
-        raise _refuse("verdict.confidence", f"outside 0-1 ({confidence})")
-    explanation = verdict.get("explanation")
-    if not isinstance(explanation, str):
-        raise _refuse("verdict.explanation", "missing or not text")
-    return _Diagnosis(
-        effects=tuple(effects),
-        confidence=confidence,
-        explanation=explanation,
-        calibration=_calibration(top),
-        hypotheses=_hypotheses(top.get("hypotheses"), set(effects)),
-        metrics={model: _model_metrics(top, model) for model in _DIAGNOSIS_MODELS},
-    )
-
-
-def _model_metrics(top: Mapping[str, Any], model: str) -> dict[str, dict[str, float]]:
-    return check_metrics(_mapping(top.get(model), model).get("metrics"), f"{model}.metrics")
-
-
-def _calibration(top: Mapping[str, Any]) -> tuple[CalibrationValue, ...]:
-    calibration = _mapping(top.get("calibration"), "calibration")
-    multipliers = _mapping(calibration.get("multipliers"), "calibration.multipliers")
-    prior = _mapping(calibration.get("prior_sigma"), "calibration.prior_sigma")
-    posterior = _mapping(calibration.get("posterior_sigma"), "calibration.posterior_sigma")
-    improved = _mapping(top.get("improved"), "improved")
-    parameters = _numbers(improved.get("parameters", {}), "improved.parameters")
-    values = []
-    for name, multiplier in multipliers.items():
-        sigma = _number(prior.get(name), f"calibration.prior_sigma.{name}", positive=True)
-        after = _number(posterior.get(name), f"calibration.posterior_sigma.{name}", infinite=True)
-        if after < 0:
-            raise _refuse(f"calibration.posterior_sigma.{name}", f"below 0 ({after})")
-        refit = parameters.get(f"calibration.{name}")
-        if refit is not None and refit <= 0:
-            raise _refuse(f"improved.parameters.calibration.{name}", f"not above 0 ({refit})")
-        values.append(
-            CalibrationValue(
-                name=name,
-                multiplier=_number(multiplier, f"calibration.multipliers.{name}", positive=True),
-                prior_sigma=sigma,
-                posterior_sigma=after,
-                improved_multiplier=refit,
-            )
-        )
-    return tuple(values)
-
-
-def _hypotheses(raw: object, named: set[str]) -> tuple[HypothesisRow, ...]:
-    if not isinstance(raw, list | tuple):
-        raise _refuse("hypotheses", "missing or not a list")
-    rows: dict[str, HypothesisRow] = {}
-    for index, item in enumerate(raw):
-        key = f"hypotheses[{index}]"
-        entry = _mapping(item, key)
-        effect = entry.get("effect")
-        if not isinstance(effect, str) or not effect:
-            raise _refuse(f"{key}.effect", "missing or not an effect name")
-        if effect in rows:
-            raise _refuse(f"{key}.effect", f"{effect} twice")
-        rows[effect] = HypothesisRow(
-            effect=effect,
-            named=bool(named) and set(effect.split("+")) <= named,
-            held_out_improvement=_number(
-                entry.get("held_out_improvement"), f"{key}.held_out_improvement", positive=True
-            ),
-            score=_number(entry.get("score"), f"{key}.score"),
-            parameters=_numbers(entry.get("parameters", {}), f"{key}.parameters"),
-        )
-    return tuple(rows.values())
-
-
 def _run_key(kind: str, recording_hash: str, rig_hash: str, version: str) -> str:
     """A run's key as one text: what a writer locks on PostgreSQL."""
     return "\x1f".join(("brake_hil run", kind, recording_hash, rig_hash, version))
-
-
-def _one_line(text: str) -> str:
-    return " ".join(text.split()) or "(no message)"
 
 
 # --------------------------------------------------------------------------- the store
@@ -478,7 +154,7 @@ class ResultsStore:
         """
         try:
             checked = check_diagnosis(document)
-        except _KeyRefusedError as err:
+        except KeyRefusedError as err:
             raise BrakeHilError(f"{recording.path}: diagnosis not stored: {err}") from err
         with self._connection.transaction() as db:
             run = self._new_run(db, "diagnosis", recording)
@@ -534,11 +210,11 @@ class ResultsStore:
         if kind not in KINDS[1:]:
             raise BrakeHilError(f"metrics of {kind!r} are not stored: regression or comparison")
         try:
-            models = _mapping(metrics, "metrics")
+            models = checked_mapping(metrics, "metrics")
             if not models:
-                raise _refuse("metrics", "no model")
+                raise KeyRefusedError("metrics", "no model")
             checked = {model: check_metrics(v, f"metrics.{model}") for model, v in models.items()}
-        except _KeyRefusedError as err:
+        except KeyRefusedError as err:
             raise BrakeHilError(f"{recording.path}: {kind} not stored: {err}") from err
         with self._connection.transaction() as db:
             run = self._new_run(db, kind, recording)
@@ -572,7 +248,7 @@ class ResultsStore:
             ).fetchone()
             if good is not None:
                 return int(good[0])
-            run = self._new_run(db, kind, recording, error=_one_line(error))
+            run = self._new_run(db, kind, recording, error=one_line(error))
         return run
 
     def _new_run(
@@ -742,5 +418,5 @@ class ResultsStore:
         """Rows per table (recordings, runs, calibration, metrics, effects)."""
         return {
             table: int(self._connection.execute(f"SELECT count(*) FROM {table}").fetchone()[0])
-            for table in _TABLES[1:]
+            for table in TABLES[1:]
         }

@@ -24,8 +24,8 @@ def test_an_internal_error_on_one_case_is_recorded_the_rest_scored_and_exit_is_1
     real = benchmark.diagnose
 
     def fails_on_the_first(recording: object, rig: object) -> Diagnosis:
-        # fault injection: a bug of the diagnosis on one case (SVD of a NaN Jacobian, as
-        # seed 1601 family b case 89 once did), the real diagnosis on the other
+        # fault injection: a bug of the diagnosis on one case (an SVD of a NaN Jacobian), the
+        # real diagnosis on the other
         if f"cases/{first}/" in str(getattr(recording, "path", "")):
             raise ValueError("array must not contain infs or NaNs")
         return real(recording, rig)  # type: ignore[arg-type]

@@ -23,7 +23,7 @@ import psutil
 import pytest
 
 from brake_hil.app import parallel
-from brake_hil.app.cases import generate_cases
+from brake_hil.app.cases import CaseOptions, generate_cases
 from brake_hil.app.parallel import SERIAL, Outcome, Workers, openblas_threads, parallel_map, values
 from brake_hil.errors import BrakeHilError
 from test.app.test_parallel import blas_threads_on_worker, square_or_refuse
@@ -75,7 +75,7 @@ def mcap_messages(recording: Path) -> list[tuple[str, int, bytes]]:
 def test_cases_on_a_local_cluster_are_those_of_one_process(tmp_path: Path) -> None:
     made = {}
     for name, workers in (("serial", SERIAL), ("cluster", Workers(jobs=2))):
-        labels = generate_cases(tmp_path / name, 2, seed=4, pulsing_s=0.4, workers=workers)
+        labels = generate_cases(tmp_path / name, 2, 4, CaseOptions(pulsing_s=0.4), workers=workers)
         document = json.loads(labels.read_text())
         for label in document["cases"].values():
             label.pop("simulation_seconds")  # wall time

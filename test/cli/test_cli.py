@@ -251,7 +251,10 @@ def test_recording_without_steady_pulsing_exits_2(tmp_path: Path) -> None:
 def test_rosbag2s_own_bags_are_opened_and_the_brake_topics_named_missing(bag: str) -> None:
     path = PEER_DATA / "rosbag2" / bag
     if not path.exists():
-        pytest.skip(f"peer data not found at {path} (shared/ beside the checkout)")
+        pytest.skip(
+            f"peer data not found at {path} (set BRAKE_HIL_PEER_DATA, or shared/peer-data "
+            "beside the checkout)"
+        )
     line = _single_error_line(brake_hil("compare", path, "--rig", RIG))
     assert "/brake/master_cylinder/pressure" in line
     assert "the recording holds" in line
@@ -307,7 +310,7 @@ def test_diagnose_on_a_parameter_error_only_finds_no_missing_physics(tmp_path: P
 
 
 def _check_report(page: Path) -> None:
-    """What a reader of report.html must find (issue 12)."""
+    """What a reader of report.html must find."""
     text = html.unescape(page.read_text())
     assert text.count(NRMSE_DEFINITION) == 1  # one NRMSE, defined once
     assert "fits' measure, not the seed's per-cycle NRMSE" in text  # the other is not NRMSE

@@ -13,8 +13,10 @@ import pytest
 
 from brake_hil import __version__
 from brake_hil.app import simulate as app_simulate
-from brake_hil.cli import build_parser, commands, parser
+from brake_hil.app.recordings import recording_name, rig_beside
+from brake_hil.cli import build_parser, parser
 from brake_hil.cli.progress import progress_bar
+from brake_hil.cli.verbs import benchmark
 from brake_hil.errors import BrakeHilError
 from brake_hil.virtual_rig import simulator
 from brake_hil.virtual_rig.effects import EFFECTS
@@ -79,13 +81,13 @@ def test_rig_beside_a_recording(tmp_path: Path) -> None:
     (tmp_path / "run.rig.yaml").write_text("x")
     (tmp_path / "bare.mcap").write_text("x")
     (tmp_path / "bare.rig.yaml").write_text("x")
-    assert commands.rig_beside(tmp_path / "run") == tmp_path / "run.rig.yaml"
-    assert commands.rig_beside(Path(f"{tmp_path}/run/")) == tmp_path / "run.rig.yaml"
-    assert commands.rig_beside(tmp_path / "bare.mcap") == tmp_path / "bare.rig.yaml"
+    assert rig_beside(tmp_path / "run") == tmp_path / "run.rig.yaml"
+    assert rig_beside(Path(f"{tmp_path}/run/")) == tmp_path / "run.rig.yaml"
+    assert rig_beside(tmp_path / "bare.mcap") == tmp_path / "bare.rig.yaml"
     with pytest.raises(BrakeHilError, match="pass --rig"):
-        commands.rig_beside(tmp_path / "other")
-    assert commands.recording_name(Path("bags/one_washer_open/")) == "one_washer_open"
-    assert commands.recording_name(Path("x/run.mcap")) == "run"
+        rig_beside(tmp_path / "other")
+    assert recording_name(Path("bags/one_washer_open/")) == "one_washer_open"
+    assert recording_name(Path("x/run.mcap")) == "run"
 
 
 def test_diagnose_without_a_rig_beside_exits_2_with_one_line(tmp_path: Path) -> None:
@@ -96,9 +98,9 @@ def test_diagnose_without_a_rig_beside_exits_2_with_one_line(tmp_path: Path) -> 
 
 
 def test_empty_benchmark_categories_print_n_a() -> None:
-    assert commands._figure(math.nan, 100.0, "6.1f", " %") == "   n/a  "
-    assert commands._figure(0.5, 100.0, "6.1f", " %") == "  50.0 %"
-    assert commands._figure(None, 1.0, ".1f") == "n/a"
+    assert benchmark._figure(math.nan, 100.0, "6.1f", " %") == "   n/a  "
+    assert benchmark._figure(0.5, 100.0, "6.1f", " %") == "  50.0 %"
+    assert benchmark._figure(None, 1.0, ".1f") == "n/a"
 
 
 def test_progress_off_a_terminal_is_whole_lines_never_past_the_total() -> None:

@@ -1,1 +1,1 @@
-"""Hostile inputs: the property-based fuzz suite and the reproducible corpus (issue 11)."""
+"""Hostile inputs: the property-based fuzz suite and the reproducible corpus."""

@@ -1,4 +1,4 @@
-"""A reproducible corpus of hostile inputs: every kind issue 11 lists, made from the good files.
+"""A reproducible corpus of hostile inputs of every kind, made from the good files.
 
 ``python -m test.hostile.corpus DIR`` writes it; :func:`build` returns the cases. Each
 :class:`Case` says which commands to run, what it expects (``refused``: exit 2 with one line
@@ -186,6 +186,23 @@ def _recording_cases(folder: Path, good_bag: Path, full: damage.Messages) -> lis
         "/brake/block/force",
         "physical bounds",
     )
+    _gap_cases(refused, good, full)
+    cases.append(
+        Case(
+            "two_removed_samples",
+            bag("two_removed_samples", damage.drop(good, BLOCK_FORCE, 3000, 2)),
+            rig,
+            "answer",
+            commands=("compare", "characterize"),
+            check=_close_to_good,
+        )
+    )
+    cases.extend(_door_cases(folder, good, rig))
+    return cases
+
+
+def _gap_cases(refused: Callable[..., None], good: damage.Messages, full: damage.Messages) -> None:
+    """Holes and removed samples, in every topic or in one: refused as gaps."""
     hole = full
     for spec in list(full.topics):
         hole = damage.shift_stamps(hole, spec, 9000, 10_000_000_000)
@@ -206,17 +223,11 @@ def _recording_cases(folder: Path, good_bag: Path, full: damage.Messages) -> lis
         "/brake/master_cylinder/pressure",
         "gap",
     )
-    cases.append(
-        Case(
-            "two_removed_samples",
-            bag("two_removed_samples", damage.drop(good, BLOCK_FORCE, 3000, 2)),
-            rig,
-            "answer",
-            commands=("compare", "characterize"),
-            check=_close_to_good,
-        )
-    )
-    # doors before any library: FIFOs, an unreadable folder, unsupported serialisation
+
+
+def _door_cases(folder: Path, good: damage.Messages, rig: Path) -> list[Case]:
+    """Doors before any library: FIFOs, an unreadable folder, unsupported serialisation."""
+    cases: list[Case] = []
     fifo = folder / "fifo.mcap"
     if not fifo.exists():
         os.mkfifo(fifo)
@@ -228,7 +239,9 @@ def _recording_cases(folder: Path, good_bag: Path, full: damage.Messages) -> lis
         storage.unlink()
         os.mkfifo(storage)
     cases.append(Case("fifo_in_bag_folder", fifo_bag, rig, "refused", ("FIFO",)))
-    locked = bag("unreadable_folder", good)
+    locked = folder / "unreadable_folder"
+    if not locked.exists():
+        good.write(locked)
     locked.chmod(0)
     cases.append(Case("unreadable_folder", locked, rig, "either"))
     for storage in (StoragePlugin.MCAP, StoragePlugin.SQLITE3):
@@ -263,7 +276,7 @@ def _output_cases(folder: Path, good_bag: Path) -> list[Case]:
         (diagnosis / "report.html").symlink_to(outside)
     a_file = folder / "a_file"
     a_file.write_text("x")
-    cases = [
+    return [
         Case(
             "json_in_proc",
             good_bag,
@@ -328,7 +341,6 @@ def _output_cases(folder: Path, good_bag: Path) -> list[Case]:
             out=diagnosis,
         ),
     ]
-    return cases
 
 
 def _tolerance_zero(folder: Path, good_bag: Path) -> Case:

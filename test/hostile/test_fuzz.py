@@ -34,7 +34,7 @@ def _settings(examples: int) -> settings:
 
 @_settings(100)
 @given(fuzzing.recording_damage)
-# A byte flipped inside a zstd chunk: zstandard's ZstdError is no ValueError (CI, stop 16).
+# A byte flipped inside a zstd chunk: zstandard's ZstdError is no ValueError.
 @example(([], ("flip", [(1.0, 1), (0.023348339548065814, 1)]), "compare"))
 # A cut recording refused: the reader's note on the unfinished file was a second stderr line.
 @example(([], ("truncate", 0.7768697535949292), "characterize"))

@@ -1,4 +1,4 @@
-"""Rig description: the YAML of interface.md is loaded and checked at the door."""
+"""Rig description: the YAML of docs/interface.md is loaded and checked at the door."""
 
 from __future__ import annotations
 

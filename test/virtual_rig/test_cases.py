@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from brake_hil.app.cases import generate_cases
+from brake_hil.app.cases import CaseOptions, generate_cases
 from brake_hil.io.recording_reader import read_recording
 from brake_hil.physics.rig import load_rig
 from brake_hil.virtual_rig import EFFECTS
@@ -77,7 +77,7 @@ def test_a_case_does_not_depend_on_how_many_are_generated() -> None:
 
 
 def test_generated_cases_keep_their_labels_apart(tmp_path: Path) -> None:
-    labels_path = generate_cases(tmp_path / "bench", 2, seed=4, pulsing_s=0.4)
+    labels_path = generate_cases(tmp_path / "bench", 2, 4, CaseOptions(pulsing_s=0.4))
     assert labels_path == tmp_path / "bench" / "labels.json"
     cases = sorted(p.name for p in (tmp_path / "bench" / "cases").iterdir())
     assert cases == ["000", "001"]
@@ -96,7 +96,7 @@ def test_generated_cases_keep_their_labels_apart(tmp_path: Path) -> None:
         assert label["truth_rig"]["rig"]["caliper"]["stiffness"] != nominal.caliper_stiffness
     assert labels["000"]["kind"] == "null" and labels["000"]["expected_effects"] == []
     with pytest.raises(FileExistsError):
-        generate_cases(tmp_path / "bench", 1, seed=4, pulsing_s=0.4)
+        generate_cases(tmp_path / "bench", 1, 4, CaseOptions(pulsing_s=0.4))
 
 
 def test_a_set_driven_at_another_frequency_and_pressures(tmp_path: Path) -> None:
@@ -105,7 +105,7 @@ def test_a_set_driven_at_another_frequency_and_pressures(tmp_path: Path) -> None
     The rig file, the labels and the recording all pulse at 8 Hz, one segment per pressure.
     """
     drive = CaseDrive(8.0, (1.0e6, 1.8e6))
-    labels_path = generate_cases(tmp_path / "bench", 1, seed=4, pulsing_s=2.0, drive=drive)
+    labels_path = generate_cases(tmp_path / "bench", 1, 4, CaseOptions(pulsing_s=2.0, drive=drive))
     document = json.loads(labels_path.read_text())
     assert document["generator"]["excitation_hz"] == 8.0
     assert document["generator"]["max_pressures_mpa"] == [1.0, 1.8]

@@ -1,0 +1,88 @@
+"""``brake-hil compare`` and ``brake-hil characterize``: one recording against its rig file."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from brake_hil.cli.verb import RECORDING_HELP, Verb, add_database_argument, json_written
+
+__all__ = ["CharacterizeVerb", "CompareVerb"]
+
+
+class CompareVerb(Verb):
+    """The paper's Table 4-5 metrics per channel."""
+
+    name = "compare"
+    help = "run the rig's LTI model on a recording"
+
+    def add_arguments(self, parser: argparse.ArgumentParser) -> None:
+        """``RECORDING --rig RIG [--json F] [--plot F] [--db URL]``."""
+        parser.add_argument("recording", type=Path, help=RECORDING_HELP)
+        parser.add_argument("--rig", type=Path, required=True, help="the rig file (YAML) to model")
+        parser.add_argument("--json", type=Path, help="also write the metrics here as JSON")
+        parser.add_argument("--plot", type=Path, help="PNG of measured vs predicted")
+        add_database_argument(parser, "default: none")
+
+    def main(self, args: argparse.Namespace) -> int:
+        """The metrics table; the plot, JSON and database row when asked for."""
+        from brake_hil.app.compare import run_compare
+        from brake_hil.app.results_db import check_database
+
+        check_database(args.db)
+        result = run_compare(args.recording, args.rig, args.json, args.plot)
+        print(f"recording {args.recording}  rig {args.rig} ({result.rig.name})")
+        for segment in result.comparison.segments:
+            print(
+                f"segment {segment.t_start:6.2f}-{segment.t_end:6.2f} s, "
+                f"mean p_i {segment.mean_pressure / 1e6:.2f} MPa"
+            )
+        print(f"{'channel':8s}{'ptp ratio %':>13s}{'tau/T %':>10s}{'NRMSE':>9s}{'cycles':>8s}")
+        for channel, m in result.comparison.metrics().items():
+            print(
+                f"{channel:8s}{m['ptp_ratio_pct']:13.1f}{m['tau_over_T_pct']:10.2f}"
+                f"{m['nrmse']:9.4f}{int(m['cycles']):8d}"
+            )
+        if result.plot_path is not None:
+            print(f"plot written to {result.plot_path}")
+        json_written(result.json_path)
+        if args.db:
+            from brake_hil.app.results_db import append_comparison
+
+            metrics = result.comparison.metrics()
+            stored = append_comparison(args.recording, args.rig, metrics, args.db)
+            print(f"results appended to {stored}")
+        return 0
+
+
+class CharacterizeVerb(Verb):
+    """The paper's Table 3 per steady segment."""
+
+    name = "characterize"
+    help = "the seal's stiffness and damping per segment (Table 3 of Liette, Dreyer, Singh 2012)"
+
+    def add_arguments(self, parser: argparse.ArgumentParser) -> None:
+        """``RECORDING --rig RIG [--json F]``."""
+        parser.add_argument("recording", type=Path, help=RECORDING_HELP)
+        parser.add_argument("--rig", type=Path, required=True, help="the rig file (YAML)")
+        parser.add_argument("--json", type=Path, help="also write the table here as JSON")
+
+    def main(self, args: argparse.Namespace) -> int:
+        """One row per steady segment; the JSON when asked for."""
+        from brake_hil.app.characterize import run_characterize
+
+        result = run_characterize(args.recording, args.rig, args.json)
+        header = (
+            f"{'segment s':>13s}{'max p MPa':>10s}{'k_eh*':>7s}{'eta_eh':>7s}"
+            f"{'2c_fs*':>7s}{'2c_ss*':>7s}{'2c_fb*':>7s}{'xi':>6s}  slips"
+        )
+        print(f"recording {args.recording}  rig {args.rig} ({result.rig.name})")
+        print(header)
+        for s in result.segments:
+            print(
+                f"{s.t_start:6.2f}-{s.t_end:6.2f}{s.max_pressure / 1e6:10.2f}{s.k_eh_star:7.3f}"
+                f"{s.eta_eh:7.3f}{s.two_c_fs_star:7.3f}{s.two_c_ss_star:7.3f}"
+                f"{s.two_c_fb_star:7.3f}{s.xi:6.2f}  {'yes' if s.seal_slips else 'no'}"
+            )
+        json_written(result.json_path)
+        return 0
