@@ -19,7 +19,7 @@ import pytest
 from brake_hil.app.chain import ros_environment
 from brake_hil.io.can_daq import CanDaq, DaqStatus, DecodedSample
 from brake_hil.nodes import common
-from brake_hil.nodes.rig_emulator import _CanOutput, precompute_run
+from brake_hil.nodes.rig_emulator_node import _CanOutput, precompute_run
 from brake_hil.physics.excitation import PulsingSchedule
 from brake_hil.physics.rig import load_rig
 

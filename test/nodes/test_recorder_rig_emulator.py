@@ -16,7 +16,7 @@ import numpy as np
 from brake_hil.app.chain import ros_environment
 from brake_hil.io.recording_reader import read_recording
 from brake_hil.nodes import common
-from brake_hil.nodes.rig_emulator import precompute_run
+from brake_hil.nodes.rig_emulator_node import precompute_run
 from brake_hil.physics.excitation import PulsingSchedule
 from brake_hil.physics.rig import load_rig
 from brake_hil.topics import MEASURED_OUTPUTS
