@@ -53,12 +53,9 @@ class CaliperModelNode(common.LoopNode):
     def __init__(self, cli_args: Sequence[str] | None = None, own_process: bool = True) -> None:
         """Build the node; its loop starts at once.
 
-        Args:
-            cli_args: the node's own ROS arguments (``--ros-args ...``), beside the process's
-                (rclpy ``Node(cli_args=...)``): how a container gives each node its own.
-            own_process: False when the node shares its process with others (the container):
-                then ``realtime_priority`` sets only the loop thread's scheduling, not every
-                thread's of the process.
+        ``cli_args`` and ``own_process`` as a container gives them to each of its nodes
+        (:func:`brake_hil.nodes.container_node.launch`); in its own process the middleware's
+        threads run one ``realtime_priority`` step above the loop.
         """
         # No parameter services: nothing spins this node but its loop (parameters are
         # read-only, set at start from the command line or a params file).
@@ -75,24 +72,9 @@ class CaliperModelNode(common.LoopNode):
                 "(python -m brake_hil.nodes.container, or the chain's --layout paired)"
             )
         period_ns = round(settings.loop_period * 1e9)
-        try:
-            hold_mode = HoldMode(settings.hold_mode)
-        except ValueError as err:
-            raise BrakeHilError(
-                f"hold_mode must be report or hold, got {settings.hold_mode!r}"
-            ) from err
-
         self.model = load_model(settings.model_file, settings.mean_pressure)
         self.statistics = LoopStatistics()
-        self._runner = CatchUpRunner(
-            self.model.stepper(),
-            period_ns=period_ns,
-            late_after_ns=round(settings.input_late_ms * 1e6),
-            silent_after_ns=round(settings.input_silent_ms * 1e6),
-            hold_mode=hold_mode,
-            statistics=self.statistics,
-            restart=self.model.stepper,
-        )
+        self._runner = self._make_runner(period_ns)
         # Faults seen (count, monotonic ns of the last change): reported at once, ERROR for
         # FAULT_ERROR_S after the last one, WARN for the rest of the run.
         self._faults = dict.fromkeys(FAULT_COUNTERS, (0, 0))
@@ -121,7 +103,43 @@ class CaliperModelNode(common.LoopNode):
         self._relock_every = max(1, round(1e9 / period_ns))
         self._last_report = self._last_relock = 0  # report / relock windows (slot numbers)
         self._wall_to_monotonic = time.monotonic_ns() - time.time_ns()
-        self._loop = DeadlineLoop(
+        self._loop = self._make_loop(period_ns)
+        self.get_logger().info(f"{self.model.description} from {self.model.path}")
+        if settings.realtime_priority > 0 and own_process:
+            # The middleware's receive threads one step above the loop: a sample is taken in
+            # as it arrives, even while the loop spins towards its deadline (a loop above them
+            # would hold them off, delaying arrivals until after its tick, and the phase lock
+            # would chase them).
+            set_process_realtime_priority(min(99, settings.realtime_priority + 1))
+        self._loop.start(held=settings.paired_with_source)
+
+    def _make_runner(self, period_ns: int) -> CatchUpRunner:
+        """The model stepped once per input sample, as the settings say.
+
+        Raises:
+            BrakeHilError: an unknown ``hold_mode``.
+        """
+        settings = self.settings
+        try:
+            hold_mode = HoldMode(settings.hold_mode)
+        except ValueError as err:
+            raise BrakeHilError(
+                f"hold_mode must be report or hold, got {settings.hold_mode!r}"
+            ) from err
+        return CatchUpRunner(
+            self.model.stepper(),
+            period_ns=period_ns,
+            late_after_ns=round(settings.input_late_ms * 1e6),
+            silent_after_ns=round(settings.input_silent_ms * 1e6),
+            hold_mode=hold_mode,
+            statistics=self.statistics,
+            restart=self.model.stepper,
+        )
+
+    def _make_loop(self, period_ns: int) -> DeadlineLoop:
+        """The 1 kHz deadline loop that ticks the model (not started)."""
+        settings = self.settings
+        return DeadlineLoop(
             self._tick,
             period_ns=period_ns,
             spin_ns=settings.spin_margin_us * 1000,
@@ -132,14 +150,6 @@ class CaliperModelNode(common.LoopNode):
             while_held=self._subscribe_when_matched,  # paired: subscribed before the source plays
             name="caliper-model-loop",
         )
-        self.get_logger().info(f"{self.model.description} from {self.model.path}")
-        if settings.realtime_priority > 0 and own_process:
-            # The middleware's receive threads one step above the loop: a sample is taken in
-            # as it arrives, even while the loop spins towards its deadline (a loop above them
-            # would hold them off, delaying arrivals until after its tick, and the phase lock
-            # would chase them).
-            set_process_realtime_priority(min(99, settings.realtime_priority + 1))
-        self._loop.start(held=settings.paired_with_source)
 
     # -- paired with the source (one container) -----------------------------------------
 
@@ -266,15 +276,20 @@ class CaliperModelNode(common.LoopNode):
 
     def statuses(self) -> list[Any]:
         """The node's diagnostics now: loop, input, model."""
-        counters = self.statistics.counters
         window = self.statistics.take_window()
-        loop_level = common.OK
-        loop_message = "1 kHz loop on time"
+        now = time.monotonic_ns()
+        self._note_faults(now)
+        return [self._loop_status(window), self._input_status(now), self._model_status(now)]
+
+    def _loop_status(self, window: Any) -> Any:
+        """``caliper_model: loop``: timing over the report window, tick counters."""
+        counters = self.statistics.counters
+        level, message = common.OK, "1 kHz loop on time"
         if self._loop.error is not None:
-            loop_level, loop_message = common.ERROR, f"loop stopped: {self._loop.error}"
+            level, message = common.ERROR, f"loop stopped: {self._loop.error}"
         elif window["period_error"].max_us >= 1000.0:
-            loop_level, loop_message = common.WARN, "ticks over 1 ms late in this window"
-        loop_values: list[tuple[str, object]] = [
+            level, message = common.WARN, "ticks over 1 ms late in this window"
+        values: list[tuple[str, object]] = [
             *common.timing_values(window),
             ("ticks", counters.ticks),
             ("late_ticks", counters.late_ticks),
@@ -290,7 +305,11 @@ class CaliperModelNode(common.LoopNode):
             ("stepped_by", "pressure_source's thread" if self._loop.held else "own loop"),
             ("driven_ticks", self._loop.driven_ticks),
         ]
-        now = time.monotonic_ns()
+        return common.diagnostic_status(f"{NAME}: loop", level, message, values)
+
+    def _input_status(self, now: int) -> Any:
+        """``caliper_model: input``: its state, silence, held and faulty samples."""
+        counters = self.statistics.counters
         state = self._runner.state
         silence = self._runner.silence_ns(now)
         level = INPUT_LEVELS[state]
@@ -300,7 +319,6 @@ class CaliperModelNode(common.LoopNode):
         holding = self._runner.hold_mode is HoldMode.HOLD and state is InputState.SILENT
         if holding and counters.held:
             level, message = common.WARN, message + f"; holding last input ({counters.held} held)"
-        self._note_faults(now)
         if counters.nonfinite_inputs:
             level = max(level, self._fault_level("nonfinite_inputs", now))
             stamp = self._runner.last_nonfinite_stamp_ns or 0
@@ -314,7 +332,7 @@ class CaliperModelNode(common.LoopNode):
                 f"; {counters.stamps_backwards} samples stamped at or before their predecessor "
                 "dropped (never two predictions with one stamp)"
             )
-        input_values: list[tuple[str, object]] = [
+        values: list[tuple[str, object]] = [
             ("state", state.value),
             ("silence_ms", -1.0 if silence is None else silence / 1e6),
             ("samples", counters.samples),
@@ -330,24 +348,25 @@ class CaliperModelNode(common.LoopNode):
             ("superseded", counters.superseded),
             ("hold_mode", self._runner.hold_mode.value),
         ]
-        model_values = [
+        return common.diagnostic_status(f"{NAME}: input", level, message, values)
+
+    def _model_status(self, now: int) -> Any:
+        """``caliper_model: model``: the model, and its non-finite states."""
+        counters = self.statistics.counters
+        values = [
             ("model_file", str(self.model.path)),
             ("mean_pressure_pa", self.model.mean_pressure),
             ("nonfinite_states", counters.nonfinite_states),
             ("state_resets", counters.state_resets),
         ]
-        model_level, model_message = common.OK, self.model.description
+        level, message = common.OK, self.model.description
         if counters.nonfinite_states:
-            model_level = self._fault_level("nonfinite_states", now)
-            model_message = (
+            level = self._fault_level("nonfinite_states", now)
+            message = (
                 f"non-finite model state {counters.nonfinite_states} times (not published); "
                 f"reset to the equilibrium at the next good input {counters.state_resets} times"
             )
-        return [
-            common.diagnostic_status(f"{NAME}: loop", loop_level, loop_message, loop_values),
-            common.diagnostic_status(f"{NAME}: input", level, message, input_values),
-            common.diagnostic_status(f"{NAME}: model", model_level, model_message, model_values),
-        ]
+        return common.diagnostic_status(f"{NAME}: model", level, message, values)
 
     def close(self) -> None:
         """Stop the loop, step and publish what is still queued, report, write statistics."""

@@ -59,6 +59,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+import importlib
 from pathlib import Path
 import sys
 
@@ -166,9 +167,8 @@ def main(args: Sequence[str] | None = None) -> int:
     if problem is not None:
         print(f"{NAME}: error: {problem}", file=sys.stderr)
         return 2
-    from brake_hil.nodes.container_node import launch
-
-    return launch(global_args, specs)
+    ros_side = importlib.import_module("brake_hil.nodes.container_node")  # imports rclpy
+    return int(ros_side.launch(global_args, specs))
 
 
 if __name__ == "__main__":

@@ -1,7 +1,7 @@
 """What a node's process does before ROS starts: its help, its environment, its folders.
 
 ROS-free, so that ``NODE --help`` answers without importing rclpy: each node's entry module
-(``brake_hil.nodes.<name>``) parses here and imports its node only to run it.
+(``brake_hil.nodes.<name>``) runs :func:`run_entry`, which imports the node only to run it.
 
 * :func:`answer_help` prints a node's usage and parameters for ``-h``/``--help``.
 * :func:`setup_environment` keeps DDS discovery on loopback unless the caller chose otherwise.
@@ -13,6 +13,7 @@ ROS-free, so that ``NODE --help`` answers without importing rclpy: each node's e
 from __future__ import annotations
 
 from collections.abc import Sequence
+import importlib
 import json
 import os
 from pathlib import Path
@@ -30,6 +31,7 @@ __all__ = [
     "config_path",
     "is_source_checkout",
     "recording_directory",
+    "run_entry",
     "setup_environment",
     "write_summary",
 ]
@@ -113,3 +115,14 @@ def answer_help(name: str, args: Sequence[str] | None) -> bool:
         return False
     print(help_text(name) if name in NODE_SETTINGS else f"usage: {name} [--ros-args ...]")
     return True
+
+
+def run_entry(name: str, args: Sequence[str] | None) -> int:
+    """The process of node ``name``: its help, or its ROS side run; the exit status.
+
+    The ROS side, ``brake_hil.nodes.<name>_node``, and so rclpy, is imported only to run.
+    """
+    if answer_help(name, args):
+        return 0
+    node = importlib.import_module(f"brake_hil.nodes.{name}_node")
+    return int(node.main(args))

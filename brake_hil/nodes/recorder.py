@@ -37,21 +37,14 @@ from __future__ import annotations
 from collections.abc import Sequence
 import sys
 
-from brake_hil.nodes.entry import answer_help
+from brake_hil.nodes.entry import run_entry
 
 NAME = "recorder"
 
 
 def main(args: Sequence[str] | None = None) -> int:
-    """Entry point ``recorder``: its help, or the node run until SIGINT/SIGTERM.
-
-    ``-h``/``--help`` prints the usage and every parameter without importing rclpy.
-    """
-    if answer_help(NAME, args):
-        return 0
-    from brake_hil.nodes.recorder_node import main as run_node
-
-    return run_node(args)
+    """Entry point ``recorder``: its help, or the node run until SIGINT/SIGTERM."""
+    return run_entry(NAME, args)
 
 
 if __name__ == "__main__":
