@@ -126,9 +126,9 @@ SAMPLE_QOS = QoSProfile(
     durability=DurabilityPolicy.VOLATILE,
 )
 """QoS of the 1 kHz sample and prediction topics: reliable, with 30 s of history, so a
-subscriber (the recorder) starved for seconds on a busy machine still receives every sample
-(with 1 s, a recorder on a 2-core machine at load 5-9 lost 11 of 4000; with 5 s, a CI runner
-where the nodes took 2.5 times their usual CPU time lost 4495 of 36 000). Fast DDS caps any history
+subscriber (the recorder) starved for seconds on a busy host still receives every sample
+(with 1 s, a recorder on a 2-core host at load 5-9 lost 11 of 4000; with 5 s, a host where
+the nodes took 2.5 times their usual CPU time lost 4495 of 36 000). Fast DDS caps any history
 at 5000 samples unless its resource limits are raised: the loopback profile
 (``config/fastdds_loopback.xml``) raises them; under another profile (SUBNET, the user's)
 the history is what that profile allows."""
