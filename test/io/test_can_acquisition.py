@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 import threading
 import time
 import uuid
@@ -18,23 +17,8 @@ INTERFACE = "virtual"
 VALUES = {"p_i": 1.0e6, "p_b": 0.9e6, "F_k": 1000.0, "x_c": 1.0e-4, "p_a": 1.0e5}
 
 
-@pytest.fixture
-def channel() -> str:
-    """A virtual channel of this test alone."""
-    return f"brake_hil_test_{uuid.uuid4().hex}"
-
-
-@pytest.fixture
-def sender(channel: str) -> Iterator[can.BusABC]:
-    """The rig side of the bus."""
-    bus = can.Bus(interface=INTERFACE, channel=channel)
-    yield bus
-    bus.shutdown()
-
-
-def test_samples_are_sent_once_each_and_a_silent_bus_goes_stale(
-    channel: str, sender: can.BusABC
-) -> None:
+def test_samples_are_sent_once_each_and_a_silent_bus_goes_stale() -> None:
+    channel = f"brake_hil_acquisition_{uuid.uuid4().hex}"  # this test's own virtual bus
     changes: list[DaqStatus] = []
     daq = CanDaq(INTERFACE, channel, stale_after_s=0.010)
     acquisition = CanAcquisition(daq, False, lambda: changes.append(daq.health().status))
@@ -44,6 +28,7 @@ def test_samples_are_sent_once_each_and_a_silent_bus_goes_stale(
     worker = threading.Thread(
         target=acquisition.run, args=({"p_i": (sent.append, lambda s, v: (s, v))}, stop)
     )
+    sender = can.Bus(interface=INTERFACE, channel=channel)  # the rig's side
     worker.start()
     try:
         assert wait_until(lambda: daq.health().status is not DaqStatus.ADAPTER_LOST, 5.0)
@@ -56,6 +41,7 @@ def test_samples_are_sent_once_each_and_a_silent_bus_goes_stale(
     finally:
         stop.set()
         worker.join(5.0)
+        sender.shutdown()
     assert [value for _, value in sent] == [pytest.approx(VALUES["p_i"], rel=1e-4)] * 20
     assert acquisition.published == 20
     assert acquisition.stale_reports_ms  # the delay from the last frame to the report
