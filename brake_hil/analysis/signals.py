@@ -28,7 +28,6 @@ import math
 
 import numpy as np
 import numpy.typing as npt
-from scipy import signal as sps  # type: ignore[import-untyped]
 
 from brake_hil.analysis.cycle_metrics import (
     ChannelMetrics,
@@ -103,6 +102,8 @@ def _zero_phase(
     if len(edges) == 2 and not edges[0] < edges[1]:
         msg = f"Band-pass edges must satisfy low < high, got {edges[0]} and {edges[1]} Hz."
         raise SignalError(msg)
+    from scipy import signal as sps  # type: ignore[import-untyped]  # 1-2 s: not at import
+
     sos = sps.butter(order, cutoff_hz, btype=btype, fs=sample_rate_hz, output="sos")
     # sosfiltfilt pads with an odd extension of this many samples (scipy's default).
     taps = 2 * sos.shape[0] + 1 - min(int(np.sum(sos[:, 2] == 0)), int(np.sum(sos[:, 5] == 0)))

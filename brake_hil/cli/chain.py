@@ -1,11 +1,12 @@
 """The command line of the node-chain launcher: ``python -m brake_hil.nodes.chain``.
 
-Parses the options, runs :func:`brake_hil.app.chain.run_chain` (``--layout``: which nodes share
-a process, :mod:`brake_hil.nodes.container`; ``--one-process`` the four in one; or
-:func:`~brake_hil.app.chain.run_can_chain` with ``--can-emulator``), prints its notices as
+Parses the options, runs ``brake_hil.app.chain.run_chain`` (``--layout``: which nodes share
+a process, ``brake_hil.nodes.container``; ``--one-process`` the four in one; or
+``run_can_chain`` with ``--can-emulator``), prints its notices as
 they come and then the comparator's run summary, the model's timing and where the MCAP is.
 Exit status: 0; 1 when a node exited with an error, or when an input sample was lost or left
-unpredicted (one line saying how many); 2 on bad input (one line on stderr).
+unpredicted (one line saying how many); 2 on bad input (one line on stderr). ``--help``
+imports neither the runs nor rclpy.
 """
 
 from __future__ import annotations
@@ -14,19 +15,16 @@ import argparse
 from collections.abc import Sequence
 from pathlib import Path
 import sys
+from typing import TYPE_CHECKING
 
-from brake_hil.app.chain import (
-    CONTAINER,
-    DEFAULT_MODEL,
-    DEFAULT_RECORDING,
-    LAYOUTS,
-    PROJECT,
-    ChainResult,
-    run_can_chain,
-    run_chain,
-)
+from brake_hil.app.chain_environment import DEFAULT_MODEL, DEFAULT_RECORDING, PROJECT
+from brake_hil.app.chain_layouts import LAYOUTS
+from brake_hil.app.chain_processes import CONTAINER
 from brake_hil.errors import BrakeHilError
 from brake_hil.topics import OUTPUT_CHANNELS
+
+if TYPE_CHECKING:
+    from brake_hil.app.chain_result import ChainResult
 
 __all__ = ["add_layout_arguments", "build_parser", "main", "result_lines"]
 
@@ -36,12 +34,25 @@ DESCRIPTION = (
 )
 
 
+class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
+    """Each option's default after its help, unless the help says it or there is none.
+
+    None, a flag's False and an empty list are no default worth saying.
+    """
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text = action.help or ""
+        if action.default in (None, False, []) or "default" in text:
+            return text
+        return super()._get_help_string(action)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the launcher."""
     parser = argparse.ArgumentParser(
         prog="python -m brake_hil.nodes.chain",
         description=DESCRIPTION,
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+        formatter_class=HelpFormatter,
     )
     parser.add_argument(
         "recording",
@@ -120,6 +131,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.layout != "processes" and args.can_emulator:
         parser.error("--layout runs a replay; it does not combine with --can-emulator")
+    from brake_hil.app.chain_runs import run_can_chain, run_chain
+
     try:
         if args.can_emulator:
             out = (

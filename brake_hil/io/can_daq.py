@@ -66,20 +66,14 @@ Errors::
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Mapping
 from enum import Enum
-import errno
 import math
-import os
 from pathlib import Path
-import struct
-import sys
 import time
-from types import TracebackType
 from typing import Any, Final, NamedTuple, Self
 
 import can
-import cantools
 
 from brake_hil.errors import (
     CanDaqError,
@@ -88,189 +82,46 @@ from brake_hil.errors import (
     FrameLengthError,
     UnknownFrameError,
 )
+from brake_hil.io.can_codec import (
+    COUNTER_MODULUS,
+    COUNTER_SIGNAL,
+    CRC_SIGNAL,
+    DEFAULT_DBC_PATH,
+    DecodedFrame,
+    FrameSpec,
+    RigFrameCodec,
+    crc8_sae_j1850,
+    default_dbc_path,
+    frame_crc,
+)
+from brake_hil.io.closing import Closing
+from brake_hil.io.slcan_pty import DRAIN_S, DRAIN_SETTLE_S, SlcanPty, slcan_line
 
-DEFAULT_DBC_PATH: Final = Path(__file__).resolve().parents[2] / "config" / "brake_rig.dbc"
-"""The rig's CAN database in a source checkout (see :func:`default_dbc_path`)."""
+__all__ = [
+    "COUNTER_MODULUS",
+    "COUNTER_SIGNAL",
+    "CRC_SIGNAL",
+    "DEFAULT_DBC_PATH",
+    "DRAIN_SETTLE_S",
+    "DRAIN_S",
+    "CanDaq",
+    "CanDaqError",
+    "DaqHealth",
+    "DaqStatus",
+    "DbcError",
+    "DecodedFrame",
+    "DecodedSample",
+    "FrameSpec",
+    "RigFrameCodec",
+    "SlcanPty",
+    "crc8_sae_j1850",
+    "default_dbc_path",
+    "frame_crc",
+    "slcan_line",
+]
 
-COUNTER_SIGNAL: Final = "sample_counter"
-CRC_SIGNAL: Final = "crc8"
-COUNTER_MODULUS: Final = 1 << 24
-_CRC_BYTE: Final = 7
 _NS_PER_S: Final = 1_000_000_000
 _DRIFT_ALLOWANCE: Final = 1e-4  # t0 may creep up by 100 ppm of elapsed time
-
-
-def default_dbc_path() -> Path:
-    """``config/brake_rig.dbc`` of the checkout, else of the ament install (``share/``)."""
-    if DEFAULT_DBC_PATH.is_file():
-        return DEFAULT_DBC_PATH
-    return Path(sys.prefix) / "share" / "brake_hil" / "config" / "brake_rig.dbc"
-
-
-def crc8_sae_j1850(data: bytes | bytearray) -> int:
-    """CRC-8/SAE-J1850: poly 0x1D, init 0xFF, no reflection, xorout 0xFF (check 0x4B)."""
-    crc = 0xFF
-    for byte in data:
-        crc ^= byte
-        for _ in range(8):
-            crc = ((crc << 1) ^ 0x1D) & 0xFF if crc & 0x80 else (crc << 1) & 0xFF
-    return crc ^ 0xFF
-
-
-def frame_crc(arbitration_id: int, data: bytes | bytearray) -> int:
-    """The rig's crc8 of a frame: over the id, then data bytes 0-6.
-
-    The id takes 2 little-endian bytes, 4 if extended.
-    """
-    width = 2 if arbitration_id < 0x800 else 4
-    return crc8_sae_j1850(arbitration_id.to_bytes(width, "little") + bytes(data[:_CRC_BYTE]))
-
-
-class FrameSpec(NamedTuple):
-    """One rig frame of the DBC."""
-
-    name: str  # DBC message name
-    frame_id: int
-    is_extended: bool
-    quantities: tuple[str, ...]  # the signals that carry measurements, e.g. ("p_i", "p_b")
-
-
-class DecodedFrame(NamedTuple):
-    """The content of one good frame."""
-
-    name: str
-    counter: int  # raw sample_counter, 0 .. 2**24 - 1
-    values: dict[str, float]  # quantity -> SI value (Pa, N, m)
-
-
-class _Signal(NamedTuple):
-    low: float  # SI value of raw 0 (the DBC offset)
-    scale: float  # SI per count
-    top: int  # largest raw count
-
-
-class RigFrameCodec:
-    """Encode and decode the rig's frames with a DBC (cantools), checking length and CRC.
-
-    Args:
-        dbc_path: the CAN database; every message in it must be 8 bytes long, carry
-            ``sample_counter`` and ``crc8`` (byte 7) and share one ``GenMsgCycleTime``.
-
-    Raises:
-        DbcError: missing or unparsable file, or a message that breaks the rules above.
-    """
-
-    def __init__(self, dbc_path: Path | str | None = None) -> None:
-        path = Path(dbc_path) if dbc_path is not None else default_dbc_path()
-        try:
-            database = cantools.database.can.Database()
-            database.add_dbc_file(str(path))
-        except Exception as err:  # cantools raises many types on a bad file
-            raise DbcError(f"{path}: cannot load the CAN database: {err}") from err
-        self.path = path
-        self._messages: dict[tuple[int, bool], Any] = {}
-        self._signals: dict[str, dict[str, _Signal]] = {}
-        specs: list[FrameSpec] = []
-        cycle_times: set[int] = set()
-        for message in database.messages:
-            names = [s.name for s in message.signals]
-            where = f"{path}: message {message.name}"
-            if message.length != 8:
-                raise DbcError(f"{where} is {message.length} bytes; rig frames are 8")
-            if COUNTER_SIGNAL not in names or CRC_SIGNAL not in names:
-                raise DbcError(f"{where} lacks {COUNTER_SIGNAL} or {CRC_SIGNAL}")
-            crc = message.get_signal_by_name(CRC_SIGNAL)
-            if (crc.start, crc.length, crc.byte_order) != (56, 8, "little_endian"):
-                raise DbcError(f"{where}: {CRC_SIGNAL} must be byte 7 (start 56, 8 bits)")
-            if not message.cycle_time:
-                raise DbcError(f"{where} has no GenMsgCycleTime")
-            cycle_times.add(int(message.cycle_time))
-            quantities = tuple(n for n in names if n not in (COUNTER_SIGNAL, CRC_SIGNAL))
-            self._signals[message.name] = {
-                s.name: _Signal(float(s.offset), float(s.scale), (1 << s.length) - 1)
-                for s in message.signals
-                if s.name in quantities
-            }
-            key = (message.frame_id, bool(message.is_extended_frame))
-            self._messages[key] = message
-            specs.append(FrameSpec(message.name, message.frame_id, key[1], quantities))
-        if len(cycle_times) != 1:
-            raise DbcError(f"{path}: messages must share one GenMsgCycleTime, got {cycle_times}")
-        self.frames: tuple[FrameSpec, ...] = tuple(specs)
-        """The rig frames, in DBC order."""
-        self.sample_period_ns: int = cycle_times.pop() * 1_000_000
-        """Time between acquisitions (ns), from ``GenMsgCycleTime``."""
-
-    @property
-    def quantities(self) -> tuple[str, ...]:
-        """Every measured quantity the DBC carries, e.g. ``("p_i", "p_b", "F_k", ...)``."""
-        return tuple(q for spec in self.frames for q in spec.quantities)
-
-    def encode(
-        self, counter: int, values: Mapping[str, float], timestamp: float = 0.0
-    ) -> list[can.Message]:
-        """The frames of one acquisition.
-
-        Args:
-            counter: the acquisition's sample counter (taken modulo 2**24).
-            values: SI value per quantity; a frame is sent only when all its quantities are
-                given (so a rig without ``p_a`` sends no ``BRAKE_AIR``). Values outside a
-                sensor's range saturate at its ends, as the sensor would; NaN is refused.
-            timestamp: the python-can ``timestamp`` (s) of the frames.
-
-        Raises:
-            ValueError: a NaN value.
-        """
-        frames = []
-        for spec in self.frames:
-            if not all(q in values for q in spec.quantities):
-                continue
-            raw: dict[str, int] = {COUNTER_SIGNAL: counter % COUNTER_MODULUS, CRC_SIGNAL: 0}
-            for name, signal in self._signals[spec.name].items():
-                value = float(values[name])
-                if math.isnan(value):
-                    raise ValueError(f"{spec.name}: {name} is NaN")
-                counts = round((value - signal.low) / signal.scale)
-                raw[name] = min(max(counts, 0), signal.top)
-            message = self._messages[(spec.frame_id, spec.is_extended)]
-            data = bytearray(message.encode(raw, scaling=False, strict=False))
-            data[_CRC_BYTE] = frame_crc(spec.frame_id, data)
-            frames.append(
-                can.Message(
-                    timestamp=timestamp,
-                    arbitration_id=spec.frame_id,
-                    is_extended_id=spec.is_extended,
-                    data=data,
-                )
-            )
-        return frames
-
-    def decode(self, frame: can.Message) -> DecodedFrame:
-        """Values (SI) and raw counter of one frame.
-
-        Raises:
-            UnknownFrameError: id not in the DBC, or a remote frame.
-            FrameLengthError: DLC differs from the DBC's.
-            ChecksumError: crc8 mismatch.
-        """
-        key = (frame.arbitration_id, bool(frame.is_extended_id))
-        message = self._messages.get(key)
-        if message is None or frame.is_remote_frame:
-            kind = "remote frame" if frame.is_remote_frame else "frame"
-            raise UnknownFrameError(f"unknown {kind} id 0x{frame.arbitration_id:X}")
-        data = bytes(frame.data)
-        if len(data) != message.length or frame.dlc != message.length:
-            msg = f"{message.name}: DLC {frame.dlc} ({len(data)} bytes), expected {message.length}"
-            raise FrameLengthError(msg)
-        if data[_CRC_BYTE] != (expected := frame_crc(frame.arbitration_id, data)):
-            msg = f"{message.name}: crc8 0x{data[_CRC_BYTE]:02X}, expected 0x{expected:02X}"
-            raise ChecksumError(msg)
-        raw = message.decode(data, decode_choices=False, scaling=False)
-        values = {
-            name: float(raw[name]) * signal.scale + signal.low
-            for name, signal in self._signals[message.name].items()
-        }
-        return DecodedFrame(message.name, int(raw[COUNTER_SIGNAL]), values)
 
 
 class DecodedSample(NamedTuple):
@@ -357,7 +208,7 @@ BusFactory = Callable[[], can.BusABC]
 """Makes an open python-can bus (for tests, or buses that need special set-up)."""
 
 
-class CanDaq:
+class CanDaq(Closing):
     """Acquire the rig's frames from a python-can bus: decode, stamp, watch health.
 
     Args:
@@ -499,15 +350,7 @@ class CanDaq:
 
     def __enter__(self) -> Self:
         self.open()
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        traceback: TracebackType | None,
-    ) -> None:
-        self.close()
+        return super().__enter__()
 
     # -- acquisition --------------------------------------------------------------------
 
@@ -615,164 +458,3 @@ class CanDaq:
         else:
             status = DaqStatus.OK
         return DaqHealth(status=status, age_s=age_s, last_error=self._last_error, **self._counts)
-
-
-def slcan_line(frame: can.Message) -> bytes:
-    r"""The slcan (Lawicel) text of a classic data frame, ``tIIILDD..\r`` (``T`` if extended)."""
-    data = bytes(frame.data).hex().upper()
-    if frame.is_extended_id:
-        return f"T{frame.arbitration_id:08X}{len(frame.data)}{data}\r".encode()
-    return f"t{frame.arbitration_id:03X}{len(frame.data)}{data}\r".encode()
-
-
-DRAIN_S = 5.0
-"""How long an emulated adapter that closes waits for its reader to read what it sent (s)."""
-
-DRAIN_SETTLE_S = 0.05
-"""How long the reader's queue must stay empty before a closing adapter counts it read (s)."""
-
-
-class SlcanPty:
-    r"""The device side of an slcan adapter on a pseudo-terminal pair (for an emulated rig).
-
-    A reader in any process opens :attr:`device_path` (or ``link_path``, a symlink made to
-    it) with python-can's ``slcan`` interface. Commands the reader sends (``O``, ``C``,
-    ``S8``, ...) are acknowledged with ``\r``; frames are written without blocking, and
-    dropped (counted in :attr:`dropped`) while nobody reads, as on a bus without receivers.
-
-    Args:
-        link_path: optional symlink to create to the device (replaced if it is a symlink).
-    """
-
-    def __init__(self, link_path: Path | str | None = None) -> None:
-        import tty  # POSIX only, like pseudo-terminals
-
-        self._master, self._slave = os.openpty()
-        tty.setraw(self._slave)  # no echo, no line editing before the reader sets its mode
-        os.set_blocking(self._master, False)
-        self.device_path = os.ttyname(self._slave)
-        self.link_path = Path(link_path) if link_path is not None else None
-        if self.link_path is not None:
-            if self.link_path.is_symlink():
-                self.link_path.unlink()
-            self.link_path.symlink_to(self.device_path)
-        self.dropped = 0
-        self.sent = 0
-        self.reader_open = False  # a reader has sent slcan's open command (``O``)
-
-    def poll_reader(self) -> bool:
-        """Answer the reader's commands; True once it has opened the channel."""
-        self._answer_commands()
-        return self.reader_open
-
-    def _answer_commands(self) -> None:
-        try:
-            incoming = os.read(self._master, 4096)
-        except BlockingIOError:
-            return
-        except OSError as err:  # EIO: no reader has the device open
-            if err.errno != errno.EIO:
-                raise
-            return
-        acks = incoming.count(b"\r")
-        if b"O\r" in incoming:
-            self.reader_open = True
-        if acks:
-            try:
-                os.write(self._master, b"\r" * acks)
-            except (BlockingIOError, OSError):
-                pass
-
-    def send(self, frames: Iterable[can.Message], wait_s: float = 0.0) -> int:
-        """Write frames as slcan text; returns how many were written (the rest are dropped).
-
-        ``wait_s`` > 0: while the pty's buffer is full (the reader lags), retry a frame for up
-        to that long before dropping it, as a DAQ's own buffer would hold it (for tests whose
-        reader may be starved for a while on a busy machine).
-        """
-        self._answer_commands()
-        written = 0
-        for frame in frames:
-            line = slcan_line(frame)
-            give_up = time.monotonic() + wait_s
-            count = 0
-            while True:
-                try:
-                    count += os.write(self._master, line[count:])
-                except (BlockingIOError, OSError):
-                    pass
-                if count == len(line) or (count == 0 and time.monotonic() >= give_up):
-                    break
-                if count and time.monotonic() >= give_up + 0.01:
-                    break  # a partial line: finished below
-                time.sleep(0.0005)
-                self._answer_commands()
-            if count == len(line):
-                written += 1
-            else:  # a partial line would corrupt the next one: end it
-                self.dropped += 1
-                if count:
-                    self._finish_partial(line[count:])
-        self.sent += written
-        return written
-
-    def _finish_partial(self, rest: bytes) -> None:
-        deadline = time.monotonic() + 0.01
-        while rest and time.monotonic() < deadline:
-            try:
-                rest = rest[os.write(self._master, rest) :]
-            except BlockingIOError:
-                time.sleep(0.0002)
-            except OSError:
-                return
-
-    def unread(self) -> int:
-        """Bytes written that the reader has not read yet (the device's input queue)."""
-        import fcntl
-        import termios
-
-        try:
-            queued = fcntl.ioctl(self._slave, termios.FIONREAD, b"\0\0\0\0")
-        except OSError:
-            return 0
-        return int(struct.unpack("i", queued)[0])
-
-    def close(self, drain_s: float = DRAIN_S) -> None:
-        """Close both ends (a reader sees the adapter vanish) and remove the symlink.
-
-        First, for up to ``drain_s``, wait while a reader has frames still to read: closing
-        the pseudo-terminal discards them (a reader lagging 18 ms behind on a busy machine
-        lost the last 18 samples of a run). The queue must stay empty for ``DRAIN_SETTLE_S``:
-        the kernel moves written bytes to the reader's queue on a worker thread, so on a
-        busy machine a frame just written may not show in it yet.
-        """
-        deadline = time.monotonic() + drain_s
-        drained_since: float | None = None  # when the reader's queue was last seen empty
-        while self.reader_open and time.monotonic() < deadline:
-            now = time.monotonic()
-            if self.unread() > 0:
-                drained_since = None
-            elif drained_since is None:
-                drained_since = now
-            elif now - drained_since >= DRAIN_SETTLE_S:
-                break
-            self._answer_commands()
-            time.sleep(0.005)
-        if self.link_path is not None and self.link_path.is_symlink():
-            self.link_path.unlink()
-        for fd in (self._master, self._slave):
-            try:
-                os.close(fd)
-            except OSError:
-                pass
-
-    def __enter__(self) -> Self:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        traceback: TracebackType | None,
-    ) -> None:
-        self.close()

@@ -37,263 +37,38 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from contextlib import suppress
 import copy
-from dataclasses import dataclass, field
 import errno
-import os
 from pathlib import Path
-import re
-import struct
 import time
-from types import TracebackType
-from typing import Any, Final, NamedTuple, Self
 
 from mcap.writer import CompressionType
-from mcap.writer import Writer as McapWriter
 from rosbags.interfaces import Qos
-from rosbags.rosbag2 import Reader
-from rosbags.rosbag2.metadata import dump_qos_v9, parse_qos
 from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.store import Typestore
-import yaml
 
-from brake_hil import __version__
 from brake_hil.errors import RecordingWriteError
+from brake_hil.io.bag_metadata import (
+    METADATA_VERSION,
+    bag_metadata,
+    dump_metadata,
+    qos_text,
+    recover_metadata,
+    replace_text,
+)
+from brake_hil.io.closing import Closing
+from brake_hil.io.mcap_files import MCAP_MAGIC, Counts, FileInfo, OpenFile, TopicInfo
 
-METADATA_VERSION: Final = 9
-"""rosbag2 metadata version written (Kilted)."""
-MCAP_MAGIC: Final = b"\x89MCAP0\r\n"
-_FOOTER: Final = b"\x02" + struct.pack("<QQQI", 20, 0, 0, 0) + MCAP_MAGIC
-"""An MCAP footer without summary (summary_start 0, summary_offset_start 0, crc 0) + magic."""
-
-try:  # libyaml when present: metadata.yaml is rewritten at every chunk
-    _Dumper: Any = yaml.CSafeDumper
-except AttributeError:  # pragma: no cover - PyYAML without libyaml
-    _Dumper = yaml.SafeDumper
-
-
-class TopicInfo(NamedTuple):
-    """One recorded topic, as ``metadata.yaml`` and the MCAP channel describe it."""
-
-    name: str
-    msgtype: str  # e.g. "sensor_msgs/msg/FluidPressure"
-    msgdef: str  # ros2msg text (rosbags' generate_msgdef format)
-    type_hash: str  # RIHS01 type description hash
-    offered_qos_profiles: tuple[Qos, ...]
-    serialization_format: str = "cdr"
+__all__ = [
+    "MCAP_MAGIC",
+    "METADATA_VERSION",
+    "FileInfo",
+    "McapRecorder",
+    "TopicInfo",
+    "recover_metadata",
+]
 
 
-class FileInfo(NamedTuple):
-    """One storage file's share of the recording (committed messages only)."""
-
-    path: Path
-    message_count: int
-    start_ns: int  # first log time (ns); 0 when empty
-    end_ns: int  # last log time (ns); 0 when empty
-    size_bytes: int
-
-
-@dataclass
-class _Counts:
-    """Message counts and log-time span of a set of messages."""
-
-    per_topic: dict[int, int] = field(default_factory=dict)
-    start_ns: int | None = None
-    end_ns: int | None = None
-
-    @property
-    def total(self) -> int:
-        return sum(self.per_topic.values())
-
-    def add(self, topic: int, log_time_ns: int, count: int = 1) -> None:
-        self.per_topic[topic] = self.per_topic.get(topic, 0) + count
-        self.start_ns = log_time_ns if self.start_ns is None else min(self.start_ns, log_time_ns)
-        self.end_ns = log_time_ns if self.end_ns is None else max(self.end_ns, log_time_ns)
-
-    def merge(self, other: _Counts) -> None:
-        for topic, count in other.per_topic.items():
-            self.per_topic[topic] = self.per_topic.get(topic, 0) + count
-        if other.start_ns is not None and other.end_ns is not None:
-            self.start_ns = min(other.start_ns, self.start_ns or other.start_ns)
-            self.end_ns = max(other.end_ns, self.end_ns or other.end_ns)
-
-
-class _CommitStream:
-    """The byte stream the ``mcap`` writer writes to: buffered until :meth:`commit`."""
-
-    def __init__(self, path: Path) -> None:
-        self.path = path
-        self._fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
-        self._committed = 0  # bytes of real content on disk (the temporary footer follows)
-        self._pending = bytearray()
-
-    @property
-    def pending(self) -> int:
-        return len(self._pending)
-
-    @property
-    def size(self) -> int:
-        """Committed bytes (the temporary footer not counted)."""
-        return self._committed
-
-    def write(self, data: bytes | bytearray | memoryview) -> int:
-        self._pending += data
-        return len(data)
-
-    def tell(self) -> int:
-        return self._committed + len(self._pending)
-
-    def flush(self) -> None:
-        """No-op: content reaches the file only through :meth:`commit`."""
-
-    def commit(self, final: bool = False) -> None:
-        """Write the pending bytes (plus a temporary footer unless ``final``) in one pwrite.
-
-        Raises:
-            OSError: the write failed (disk full, file size limit, I/O error); the file is
-                put back as it was after the last commit (see :meth:`roll_back`) and the
-                pending bytes are dropped.
-        """
-        data = bytes(self._pending) if final else bytes(self._pending) + _FOOTER
-        view, offset = memoryview(data), self._committed
-        try:
-            while view:
-                written = os.pwrite(self._fd, view, offset)
-                view, offset = view[written:], offset + written
-            if final:
-                os.ftruncate(self._fd, self._committed + len(self._pending))
-        except OSError:
-            self._pending.clear()
-            self.roll_back()
-            raise
-        self._committed += len(self._pending)
-        self._pending.clear()
-
-    def discard(self) -> None:
-        """Drop the pending bytes."""
-        self._pending.clear()
-
-    def roll_back(self) -> bool:
-        """Cut the file back to its last commit and its temporary footer; True when it worked.
-
-        The blocks up to the old footer's end were allocated before, so this needs no new
-        space: after a failed write on a full disk the file is again a valid MCAP (no
-        summary) holding every committed chunk.
-        """
-        try:
-            os.ftruncate(self._fd, self._committed + len(_FOOTER))
-            os.pwrite(self._fd, _FOOTER, self._committed)
-        except OSError:
-            return False
-        return True
-
-    def close(self) -> None:
-        os.close(self._fd)
-
-
-class _OpenFile:
-    """One ``.mcap`` being written."""
-
-    def __init__(self, path: Path, chunk_bytes: int, compression: CompressionType) -> None:
-        self.path = path
-        self.stream = _CommitStream(path)
-        self.writer = McapWriter(
-            self.stream,  # type: ignore[arg-type]
-            chunk_size=chunk_bytes,
-            compression=compression,
-            enable_crcs=True,
-        )
-        try:
-            self.writer.start(profile="ros2", library=f"brake_hil {__version__}")
-            self.stream.commit()  # header + temporary footer: a valid empty MCAP from the start
-        except OSError:
-            self.stream.close()
-            raise
-        self.schema_ids: dict[str, int] = {}
-        self.channel_ids: dict[int, int] = {}  # topic handle -> MCAP channel id
-        self.committed = _Counts()
-        self.pending = _Counts()
-        self.first_log_ns: int | None = None
-        self.pending_since_ns = 0  # monotonic time of the pending chunk's first message
-
-    def add_topic(self, handle: int, topic: TopicInfo, qos_text: str) -> None:
-        if (schema := self.schema_ids.get(topic.msgtype)) is None:
-            schema = self.writer.register_schema(topic.msgtype, "ros2msg", topic.msgdef.encode())
-            self.schema_ids[topic.msgtype] = schema
-        metadata = {"offered_qos_profiles": qos_text, "topic_type_hash": topic.type_hash}
-        self.channel_ids[handle] = self.writer.register_channel(
-            topic.name, topic.serialization_format, schema, metadata
-        )
-
-    def info(self) -> FileInfo:
-        counts = self.committed
-        return FileInfo(
-            self.path, counts.total, counts.start_ns or 0, counts.end_ns or 0, self.stream.size
-        )
-
-
-def _qos_text(profiles: Sequence[Qos]) -> str:
-    """``offered_qos_profiles`` of an MCAP channel: the v9 list as YAML text."""
-    return str(yaml.dump(dump_qos_v9(list(profiles)), Dumper=_Dumper, sort_keys=False)).strip()
-
-
-def _bag_metadata(
-    files: Sequence[FileInfo],
-    topics: Sequence[TopicInfo],
-    counts: Mapping[int, int],
-    custom_data: Mapping[str, str],
-) -> dict[str, Any]:
-    """The ``rosbag2_bagfile_information`` mapping of ``metadata.yaml``."""
-    spans = [(f.start_ns, f.end_ns) for f in files if f.message_count]
-    start = min((s for s, _ in spans), default=0)
-    end = max((e for _, e in spans), default=0)
-    return {
-        "version": METADATA_VERSION,
-        "storage_identifier": "mcap",
-        "duration": {"nanoseconds": end - start},
-        "starting_time": {"nanoseconds_since_epoch": start},
-        "message_count": sum(f.message_count for f in files),
-        "topics_with_message_count": [
-            {
-                "topic_metadata": {
-                    "name": topic.name,
-                    "type": topic.msgtype,
-                    "serialization_format": topic.serialization_format,
-                    "offered_qos_profiles": dump_qos_v9(list(topic.offered_qos_profiles)),
-                    "type_description_hash": topic.type_hash,
-                },
-                "message_count": counts.get(handle, 0),
-            }
-            for handle, topic in enumerate(topics)
-        ],
-        "compression_format": "",
-        "compression_mode": "",
-        "relative_file_paths": [f.path.name for f in files],
-        "files": [
-            {
-                "path": f.path.name,
-                "starting_time": {"nanoseconds_since_epoch": f.start_ns},
-                "duration": {"nanoseconds": f.end_ns - f.start_ns},
-                "message_count": f.message_count,
-            }
-            for f in files
-        ],
-        "custom_data": dict(custom_data) or None,
-        "ros_distro": "kilted",
-    }
-
-
-def _dump(metadata: Mapping[str, Any]) -> str:
-    return str(yaml.dump(metadata, Dumper=_Dumper, default_flow_style=False, sort_keys=False))
-
-
-def _replace_text(path: Path, text: str) -> Path:
-    """Write ``text`` beside ``path`` (to be renamed over it); returns the temporary file."""
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text, encoding="utf8")
-    return tmp
-
-
-class McapRecorder:
+class McapRecorder(Closing):
     """Write serialised messages into a new rosbag2 MCAP directory, as they arrive.
 
     Args:
@@ -377,7 +152,7 @@ class McapRecorder:
         self._qos_texts: list[str] = []
         self._closed_files: list[FileInfo] = []
         self._counts: dict[int, int] = {}  # committed messages per topic handle, all files
-        self._file: _OpenFile | None = None
+        self._file: OpenFile | None = None
         self._open_next_file()
 
     # -- set-up --------------------------------------------------------------------------
@@ -423,7 +198,7 @@ class McapRecorder:
         )
         handle = len(self.topics)
         self.topics.append(topic)
-        self._qos_texts.append(_qos_text(topic.offered_qos_profiles))
+        self._qos_texts.append(qos_text(topic.offered_qos_profiles))
         assert self._file is not None
         self._file.add_topic(handle, topic, self._qos_texts[handle])
         try:
@@ -458,7 +233,7 @@ class McapRecorder:
 
     def _write(
         self,
-        current: _OpenFile,
+        current: OpenFile,
         handle: int,
         log_time_ns: int,
         data: bytes,
@@ -511,7 +286,7 @@ class McapRecorder:
             where = current.stream.path
             current.stream.discard()
             current.stream.roll_back()
-            current.pending = _Counts()
+            current.pending = Counts()
         with suppress(OSError):
             (self.path / "metadata.yaml.tmp").unlink(missing_ok=True)
         code = errno.errorcode.get(err.errno or 0, "")
@@ -537,7 +312,7 @@ class McapRecorder:
         current.committed.merge(current.pending)
         for handle, count in current.pending.per_topic.items():
             self._counts[handle] = self._counts.get(handle, 0) + count
-        current.pending = _Counts()
+        current.pending = Counts()
         now = time.monotonic()
         rewrite = (
             self._metadata_interval_s is None
@@ -580,7 +355,7 @@ class McapRecorder:
         index = len(self._closed_files)
         path = self.path / f"{self.path.name}_{index}.mcap"
         try:
-            self._file = _OpenFile(path, self._chunk_bytes, self._compression)
+            self._file = OpenFile(path, self._chunk_bytes, self._compression)
         except OSError:  # not even a header fits: leave no file a reader would choke on
             with suppress(OSError):
                 path.unlink()
@@ -596,7 +371,9 @@ class McapRecorder:
             current.writer.flush()  # type: ignore[no-untyped-call]
             self._commit(split=False)
         files = [*self._closed_files, current.info()]
-        serialized = _dump(_bag_metadata(files, self.topics, self._counts, self._custom_data))
+        serialized = dump_metadata(
+            bag_metadata(files, self.topics, self._counts, self._custom_data)
+        )
         current.writer.add_metadata("rosbag2", {"serialized_metadata": serialized})
         current.writer.finish()  # type: ignore[no-untyped-call]
         current.stream.commit(final=True)
@@ -615,11 +392,11 @@ class McapRecorder:
         if size is not None and self._file is not None:
             files[-1] = files[-1]._replace(size_bytes=size)
         document = {
-            "rosbag2_bagfile_information": _bag_metadata(
+            "rosbag2_bagfile_information": bag_metadata(
                 files, self.topics, self._counts, self._custom_data
             )
         }
-        return _replace_text(self.path / "metadata.yaml", _dump(document))
+        return replace_text(self.path / "metadata.yaml", dump_metadata(document))
 
     def _write_metadata(self) -> None:
         self._prepare_metadata().replace(self.path / "metadata.yaml")
@@ -670,70 +447,3 @@ class McapRecorder:
             self._write_metadata()
         with suppress(OSError):
             (self.path / "metadata.yaml.tmp").unlink(missing_ok=True)
-
-    def __enter__(self) -> Self:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        traceback: TracebackType | None,
-    ) -> None:
-        self.close()
-
-
-_FILE_INDEX = re.compile(r"_(\d+)\.mcap$")
-
-
-def recover_metadata(path: Path | str) -> Path:
-    """Rewrite ``metadata.yaml`` of a rosbag2 MCAP directory from its ``.mcap`` files.
-
-    For a recording whose writer was killed: counts, spans and the file list are taken from
-    what the files hold (every file the recorder leaves is a valid MCAP, see the module
-    doc). Topic QoS and type hashes come from the files' channels.
-
-    Returns:
-        The path of the new ``metadata.yaml``.
-
-    Raises:
-        FileNotFoundError: no ``.mcap`` file in ``path``.
-        rosbags.rosbag2.ReaderError: a file cannot be read.
-    """
-    path = Path(path)
-
-    def order(p: Path) -> tuple[int, str]:
-        match = _FILE_INDEX.search(p.name)
-        return (int(match.group(1)) if match else -1, p.name)
-
-    mcaps = sorted(path.glob("*.mcap"), key=order)
-    if not mcaps:
-        raise FileNotFoundError(f"{path}: no .mcap files to recover")
-    topics: dict[str, TopicInfo] = {}
-    counts: dict[str, int] = {}
-    files: list[FileInfo] = []
-    for mcap_path in mcaps:
-        with Reader(mcap_path) as reader:
-            for connection in reader.connections:
-                qos = getattr(connection.ext, "offered_qos_profiles", [])
-                topics.setdefault(
-                    connection.topic,
-                    TopicInfo(
-                        connection.topic,
-                        connection.msgtype,
-                        connection.msgdef.data,
-                        connection.digest,
-                        tuple(parse_qos(qos) if isinstance(qos, str) else qos),
-                        getattr(connection.ext, "serialization_format", "cdr"),
-                    ),
-                )
-                counts[connection.topic] = counts.get(connection.topic, 0) + connection.msgcount
-            count = reader.message_count
-            start, end = (reader.start_time, reader.end_time - 1) if count else (0, 0)
-            files.append(FileInfo(mcap_path, count, start, end, mcap_path.stat().st_size))
-    ordered = list(topics.values())
-    by_handle = {i: counts[t.name] for i, t in enumerate(ordered)}
-    document = {"rosbag2_bagfile_information": _bag_metadata(files, ordered, by_handle, {})}
-    target = path / "metadata.yaml"
-    _replace_text(target, _dump(document)).replace(target)
-    return target

@@ -1,10 +1,9 @@
-"""What the brake_hil nodes share: environment, QoS, messages of topics.py, diagnostics, spinning.
+"""What the brake_hil nodes share: QoS, messages of topics.py, parameters, diagnostics.
 
-* :func:`setup_environment` keeps DDS discovery on loopback unless the caller chose otherwise.
 * :func:`declare_settings`: a node's parameters from its settings dataclass
   (:mod:`brake_hil.nodes.settings`), declared read-only with their descriptions.
-* :data:`SAMPLE_QOS`: the 1 kHz sample topics are reliable, volatile, keep-last 1000 (one
-  second at 1 kHz: a subscriber that stalls for less than that loses nothing).
+* :data:`SAMPLE_QOS`: the 1 kHz sample topics are reliable, volatile, keep-last 30 000 (30 s
+  at 1 kHz: a subscriber that stalls for less than that loses nothing).
 * Messages of a contract topic, ``header.stamp`` = the sample's acquisition time, the value in
   the topic's field: :class:`RawMessageBuilder` (CDR bytes, for ``publish``),
   :class:`MessageBuilder` (rclpy messages), :func:`raw_reader` / :func:`value_reader`.
@@ -12,47 +11,104 @@
 * :func:`diagnostic_status`: ``diagnostic_msgs/msg/DiagnosticStatus`` with key-value pairs;
   nodes publish arrays of them on ``/diagnostics`` (:data:`DIAGNOSTICS_TOPIC`), the
   comparator also on ``/brake/comparison`` (:data:`COMPARISON_TOPIC`).
-* :func:`spin_until_signal` (callbacks on a background executor, rclpy's EventsExecutor when
-  available: :class:`BackgroundSpinner`) or :func:`wait_for_signal` (a node whose own thread
-  does the work) run until
-  SIGINT/SIGTERM, so a node can finish its work (drain, final diagnostics, files,
-  :func:`wait_for_acks`) before ``destroy_node()`` / ``rclpy.shutdown()``. Start rclpy with
-  :func:`init_ros` (rclpy's own signal handler off, ours on).
+* :func:`wait_for_acks` before a node is destroyed, so no sample in flight is lost.
+
+How a node process runs (rclpy started, callbacks spun, signals) is
+:mod:`brake_hil.nodes.spinning`; what it does before ROS starts (help, environment, folders)
+:mod:`brake_hil.nodes.entry`. Their names are importable from here too.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Mapping, Sequence
-import json
 import math
 from operator import attrgetter
-import os
-from pathlib import Path
-import signal
 import struct
-import sys
-import threading
 import time
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Vector3Stamped, WrenchStamped
 from rcl_interfaces.msg import ParameterDescriptor
-import rclpy
-from rclpy.context import Context
-from rclpy.executors import Executor, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
-from rclpy.signals import SignalHandlerOptions
 from sensor_msgs.msg import FluidPressure
 
 from brake_hil.io.stamped_cdr import FLOAT_FIELDS
-from brake_hil.nodes.settings import NODE_SETTINGS, help_text, parameter_specs
-from brake_hil.runtime import TimingSummary, loopback_environment, security_problem
+from brake_hil.nodes.entry import (
+    CHECKOUT,
+    HELP_FLAGS,
+    RECORDINGS_HOME,
+    asks_for_help,
+    config_path,
+    is_source_checkout,
+    recording_directory,
+    setup_environment,
+    write_summary,
+)
+from brake_hil.nodes.settings import parameter_specs
+from brake_hil.nodes.spinning import (
+    BackgroundSpinner,
+    LoopNode,
+    init_ros,
+    make_executor,
+    run_node,
+    run_until_stopped,
+    spin_until_signal,
+    wait_for_signal,
+)
+from brake_hil.runtime import TimingSummary
 from brake_hil.topics import TopicSpec
 
 if TYPE_CHECKING:
     from _typeshed import DataclassInstance
+
+__all__ = [
+    "ACK_WAIT_AT_END_S",
+    "ACK_WAIT_S",
+    "CHECKOUT",
+    "COMPARISON_TOPIC",
+    "DIAGNOSTICS_QOS",
+    "DIAGNOSTICS_TOPIC",
+    "ERROR",
+    "HELP_FLAGS",
+    "LEVEL_NAMES",
+    "MESSAGE_CLASSES",
+    "NS_PER_S",
+    "OK",
+    "RECORDINGS_HOME",
+    "SAMPLE_QOS",
+    "STALE",
+    "WARN",
+    "BackgroundSpinner",
+    "LoopNode",
+    "MessageBuilder",
+    "PolledInput",
+    "PolledSubscription",
+    "RawMessageBuilder",
+    "asks_for_help",
+    "config_path",
+    "declare_settings",
+    "diagnostic_array",
+    "diagnostic_status",
+    "init_ros",
+    "is_source_checkout",
+    "make_executor",
+    "message_class",
+    "raw_reader",
+    "recording_directory",
+    "run_node",
+    "run_until_stopped",
+    "setup_environment",
+    "spin_until_signal",
+    "stamp_ns",
+    "status_values",
+    "timing_values",
+    "value_reader",
+    "wait_for_acks",
+    "wait_for_signal",
+    "write_summary",
+]
 
 DIAGNOSTICS_TOPIC = "/diagnostics"
 """Where every node publishes its health (``diagnostic_msgs/msg/DiagnosticArray``)."""
@@ -70,9 +126,9 @@ SAMPLE_QOS = QoSProfile(
     durability=DurabilityPolicy.VOLATILE,
 )
 """QoS of the 1 kHz sample and prediction topics: reliable, with 30 s of history, so a
-subscriber (the recorder) starved for seconds on a busy machine still receives every sample
-(with 1 s, a recorder on a 2-core machine at load 5-9 lost 11 of 4000; with 5 s, a CI runner
-where the nodes took 2.5 times their usual CPU time lost 4495 of 36 000). Fast DDS caps any history
+subscriber (the recorder) starved for seconds on a busy host still receives every sample
+(with 1 s, a recorder on a 2-core host at load 5-9 lost 11 of 4000; with 5 s, a host where
+the nodes took 2.5 times their usual CPU time lost 4495 of 36 000). Fast DDS caps any history
 at 5000 samples unless its resource limits are raised: the loopback profile
 (``config/fastdds_loopback.xml``) raises them; under another profile (SUBNET, the user's)
 the history is what that profile allows."""
@@ -90,74 +146,6 @@ MESSAGE_CLASSES: dict[str, Any] = {
 }
 NS_PER_S = 1_000_000_000
 SettingsT = TypeVar("SettingsT", bound="DataclassInstance")
-
-
-def setup_environment() -> None:
-    """DDS on loopback only, unless ``ROS_AUTOMATIC_DISCOVERY_RANGE`` says otherwise.
-
-    Local-only (``LOCALHOST``, the default) with no Fast DDS profile of the user's: the
-    project's loopback profile (:func:`brake_hil.runtime.loopback_environment`).
-    """
-    loopback_environment(os.environ)
-
-
-def init_ros(args: Sequence[str] | None) -> None:
-    """``rclpy.init`` without rclpy's signal handlers (see :func:`spin_until_signal`)."""
-    setup_environment()
-    rclpy.init(
-        args=list(args) if args is not None else None,
-        signal_handler_options=SignalHandlerOptions.NO,
-    )
-
-
-HELP_FLAGS = ("-h", "--help")
-"""What asks a node for its help (before ``--ros-args``)."""
-CHECKOUT = Path(__file__).resolve().parents[2]
-"""The folder above the package: the source checkout when run from one."""
-RECORDINGS_HOME = "~/brake_hil_recordings"
-"""Where the recorder writes by default when started inside the source checkout."""
-
-
-def asks_for_help(args: Sequence[str] | None) -> bool:
-    """True when the command line (``sys.argv`` when None) holds ``-h``/``--help``.
-
-    Only the node's own arguments count: those before ``--ros-args``.
-    """
-    argv = list(sys.argv[1:] if args is None else args)
-    if "--ros-args" in argv:
-        argv = argv[: argv.index("--ros-args")]
-    return any(flag in argv for flag in HELP_FLAGS)
-
-
-def is_source_checkout(folder: Path) -> bool:
-    """True when ``folder`` is the brake_hil source checkout this package runs from, or in it."""
-    if not (CHECKOUT / "package.xml").is_file() or not (CHECKOUT / "brake_hil").is_dir():
-        return False
-    folder = folder.resolve()
-    return folder == CHECKOUT or CHECKOUT in folder.parents
-
-
-def recording_directory(output_dir: str, cwd: Path | None = None) -> Path:
-    """Where the recorder makes its recording directory.
-
-    ``output_dir`` when given; else the working directory (as ``ros2 bag record`` does),
-    unless that is the source checkout or inside it: then :data:`RECORDINGS_HOME`, so no
-    node writes into the source tree by default.
-    """
-    if output_dir:
-        return Path(output_dir).expanduser()
-    here = Path.cwd() if cwd is None else cwd
-    if is_source_checkout(here):
-        return Path(RECORDINGS_HOME).expanduser()
-    return here
-
-
-def config_path(name: str) -> Path:
-    """A file of ``config/`` in the checkout, else in the install's ``share/brake_hil``."""
-    checkout = Path(__file__).resolve().parents[2] / "config" / name
-    if checkout.is_file():
-        return checkout
-    return Path(sys.prefix) / "share" / "brake_hil" / "config" / name
 
 
 def message_class(spec: TopicSpec) -> Any:
@@ -396,217 +384,3 @@ def timing_values(summaries: Mapping[str, TimingSummary]) -> list[tuple[str, obj
 def status_values(status: DiagnosticStatus) -> dict[str, str]:
     """The key-value pairs of a ``DiagnosticStatus`` as a dict."""
     return {pair.key: pair.value for pair in status.values}
-
-
-def make_executor(context: Context | None = None) -> Executor:
-    """The EventsExecutor of rclpy, or the SingleThreadedExecutor when asked or missing.
-
-    The EventsExecutor dispatches callbacks from C++: about half the cost a message of the
-    default executor, which matters at several kHz on 2 cores. ``BRAKE_HIL_EXECUTOR=single``
-    or an rclpy without it gives the SingleThreadedExecutor.
-    """
-    if os.environ.get("BRAKE_HIL_EXECUTOR", "events") != "single":
-        try:
-            from rclpy.experimental import EventsExecutor
-        except ImportError:  # rclpy before Jazzy
-            pass
-        else:
-            return EventsExecutor(context=context)
-    return SingleThreadedExecutor(context=context)
-
-
-class BackgroundSpinner:
-    """A node's callbacks run by an executor of its own on a background thread.
-
-    Spins until ``stop`` is set (:meth:`stop`), or until a callback raises (the executor stops
-    at the first exception, which is printed; :attr:`healthy` turns False). The node outlives
-    the executor, so it can finish its work (drain, final diagnostics) before
-    ``destroy_node()``. :func:`spin_until_signal` runs one until a signal; the container
-    (:mod:`brake_hil.nodes.container`) runs one per node that has callbacks.
-    """
-
-    def __init__(
-        self, node: Node, stop: threading.Event | None = None, name: str = "executor"
-    ) -> None:
-        self.stop_event = stop if stop is not None else threading.Event()
-        self._failed = threading.Event()
-        self._executor = make_executor()
-        self._executor.add_node(node)
-        self._thread = threading.Thread(
-            target=_spin,
-            args=(self._executor, self.stop_event, self._failed),
-            name=name,
-            daemon=True,
-        )
-        self._thread.start()
-
-    @property
-    def alive(self) -> bool:
-        """True while the executor spins."""
-        return self._thread.is_alive()
-
-    @property
-    def healthy(self) -> bool:
-        """False once a callback raised."""
-        return not self._failed.is_set()
-
-    @property
-    def native_id(self) -> int | None:
-        """The spinning thread's kernel id (``/proc/self/task/<id>``)."""
-        return self._thread.native_id
-
-    def stop(self, timeout_s: float = 2.0) -> bool:
-        """Stop spinning and shut the executor down; returns :attr:`healthy`."""
-        self.stop_event.set()
-        self._thread.join(timeout_s)
-        if not self._thread.is_alive():
-            self._executor.shutdown()
-        return self.healthy
-
-
-def spin_until_signal(node: Node, stop: threading.Event | None = None) -> bool:
-    """Run ``node``'s callbacks on a background executor until SIGINT or SIGTERM.
-
-    Also until ``stop`` is set, or the context shuts down; then stop the executor
-    (:class:`BackgroundSpinner`).
-
-    Returns False when a callback raised (the executor stops at the first exception, which is
-    logged), True otherwise: ``main`` turns False into exit status 1.
-    """
-    stop = stop if stop is not None else threading.Event()
-
-    def on_signal(signum: int, frame: object) -> None:
-        del signum, frame
-        stop.set()
-
-    previous = {sig: signal.signal(sig, on_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
-    spinner = BackgroundSpinner(node, stop)
-    try:
-        while not stop.wait(0.1) and node.context.ok() and spinner.alive:
-            pass
-    finally:
-        spinner.stop()
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
-    return spinner.healthy
-
-
-def wait_for_signal(finished: Callable[[], bool] = lambda: False) -> None:
-    """Block until SIGINT or SIGTERM, or until ``finished()`` (polled every 0.1 s).
-
-    For a node whose own thread does all its work, with no executor to spin.
-    """
-    stop = threading.Event()
-
-    def on_signal(signum: int, frame: object) -> None:
-        del signum, frame
-        stop.set()
-
-    previous = {sig: signal.signal(sig, on_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
-    try:
-        while not stop.wait(0.1) and not finished():
-            pass
-    finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
-
-
-def _spin(executor: Executor, stop: threading.Event, failed: threading.Event) -> None:
-    # spin_once in a loop rather than spin(): the EventsExecutor's shutdown() from another
-    # thread does not return while spin() runs, and the node must outlive the executor to
-    # finish its work (drain, final diagnostics) before rclpy.shutdown().
-    try:
-        while not stop.is_set():
-            executor.spin_once(timeout_sec=0.05)
-    except Exception as err:  # noqa: BLE001 - the main thread ends the node
-        print(f"executor stopped: {type(err).__name__}: {err}", file=sys.stderr)
-        failed.set()
-    finally:
-        stop.set()
-
-
-NodeT = TypeVar("NodeT", bound=Node)
-
-
-def run_node(
-    name: str,
-    args: Sequence[str] | None,
-    make_node: Callable[[], NodeT],
-    bad_input: tuple[type[BaseException], ...],
-    run: Callable[[NodeT], bool],
-) -> int:
-    """The life of a node process: init (loopback discovery), build, run, close, shut down.
-
-    A node that cannot be built from its parameters (``bad_input``) exits 2 with one line;
-    ``run`` returns whether the node stayed healthy (exit 0, else 1). ``close()`` and
-    ``destroy_node()`` always run, so a recording is finalised even after an error.
-    ``-h``/``--help`` prints the node's usage and parameters (:func:`help_text`) and exits 0
-    before rclpy starts: nothing is built, advertised or written.
-    DDS security asked for where the DDS has no security plugins is one line and exit 2
-    (:func:`brake_hil.runtime.security_problem`), before rclpy starts.
-    """
-    if asks_for_help(args):
-        print(help_text(name) if name in NODE_SETTINGS else f"usage: {name} [--ros-args ...]")
-        return 0
-    problem = security_problem()
-    if problem is not None:
-        print(f"{name}: error: {problem}", file=sys.stderr)
-        return 2
-    init_ros(args)
-    try:
-        node = make_node()
-    except bad_input as err:
-        print(f"{name}: error: {err}", file=sys.stderr)
-        rclpy.shutdown()
-        return 2
-    try:
-        healthy = run(node)
-    finally:
-        node.close()  # type: ignore[attr-defined]
-        node.destroy_node()
-        rclpy.shutdown()
-    return 0 if healthy else 1
-
-
-def write_summary(path: str, summary: object) -> None:
-    """Write a node's closing figures as JSON to ``path`` (nothing when it is empty)."""
-    if not path:
-        return
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    target.write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
-
-
-class LoopNode(Node):
-    """A node whose work runs on a loop thread of its own.
-
-    The loop is ``self._loop``, with ``running`` and ``error``: what
-    :func:`run_until_stopped` waits on and reports.
-    """
-
-    _loop: Any
-    loop_name = "loop"
-
-    @property
-    def running(self) -> bool:
-        """True while the node's loop runs."""
-        return bool(self._loop.running)
-
-    @property
-    def loop_error(self) -> BaseException | None:
-        """What stopped the loop, None while it runs or after a clean stop."""
-        error: BaseException | None = self._loop.error
-        return error
-
-    def _on_loop_error(self, error: BaseException) -> None:
-        if self.context.ok():
-            self.get_logger().fatal(f"{self.loop_name} stopped: {type(error).__name__}: {error}")
-
-
-def run_until_stopped(node: Any) -> bool:
-    """``run`` of :func:`run_node` for nodes that work on their own thread.
-
-    Wait for a signal or the node's end; healthy unless its loop failed.
-    """
-    wait_for_signal(lambda: not node.running)
-    return node.loop_error is None

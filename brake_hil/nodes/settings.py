@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from dataclasses import MISSING, dataclass, field, fields
 from pathlib import PurePosixPath
+import re
 import typing
 from typing import TYPE_CHECKING, Any, NamedTuple
 
@@ -357,8 +358,18 @@ def _type_name(kind: Any) -> str:
     return str(kind.__name__)
 
 
+_ROLE = re.compile(r":[a-z]+:`(~?)([^`]+)`")
+"""A Sphinx cross-reference, ``:role:`target``` (``~``: its last name shown)."""
+
+
 def _plain(text: str) -> str:
-    return text.replace("``", "").replace(":class:", "").replace(":attr:", "")
+    """``text`` as plain help text: cross-references as the names they show, no backticks."""
+
+    def shown(match: re.Match[str]) -> str:
+        tilde, target = match.groups()
+        return target.rsplit(".", 1)[-1] if tilde else target
+
+    return _ROLE.sub(shown, text).replace("``", "").replace("`", "")
 
 
 def help_text(node: str) -> str:

@@ -93,7 +93,7 @@ def test_malformed_files_are_refused_naming_the_file(tmp_path: Path) -> None:
 
 
 def test_an_older_hose_model_is_refused_and_the_creep_is_used(tmp_path: Path) -> None:
-    """A file from before 2026-11-27 holds ``hose_compliance_ratio``, a multiple of each
+    """An older file holds ``hose_compliance_ratio``, a multiple of each
     segment's ``C_b``: run now it would mean another hose, so it is refused, naming the file
     and the value. A current file's creep changes the prediction (used, not ignored)."""
     _, pressure = pulsing_profile((1.38e6,), ramp_s=0.5, pulsing_s=1.5)

@@ -22,6 +22,8 @@ from rclpy.node import Node
 
 from brake_hil.app.chain import ros_environment
 from brake_hil.nodes import common
+from brake_hil.physics.excitation import PulsingSchedule
+from brake_hil.physics.rig import load_rig
 from brake_hil.runtime import loopback_environment
 from brake_hil.topics import TopicSpec
 
@@ -112,3 +114,20 @@ class Collector:
         self._executor.shutdown()
         self.node.destroy_node()
         rclpy.shutdown(context=self._context)
+
+
+def emulated_run(run: dict[str, Any], **schedule: float) -> Any:
+    """The run the rig emulator plays for the settings ``run`` (simulator, seed), offline.
+
+    On the default rig; ``schedule``: the pulsing schedule's ramp and pulsing seconds
+    (``run``'s own unless given).
+    """
+    from brake_hil.nodes.rig_emulator_node import precompute_run
+
+    timing = {"ramp_s": run["ramp_s"], "pulsing_s": run["pulsing_s"], **schedule}
+    return precompute_run(
+        load_rig(common.config_path("rig_default.yaml")),
+        run["simulator"],
+        schedule=PulsingSchedule(**timing),
+        seed=run["seed"],
+    )

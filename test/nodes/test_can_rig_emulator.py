@@ -18,10 +18,8 @@ import pytest
 
 from brake_hil.app.chain import ros_environment
 from brake_hil.io.can_daq import CanDaq, DaqStatus, DecodedSample
-from brake_hil.nodes import common
-from brake_hil.nodes.rig_emulator import _CanOutput, precompute_run
-from brake_hil.physics.excitation import PulsingSchedule
-from brake_hil.physics.rig import load_rig
+from brake_hil.nodes.rig_emulator_node import _CanOutput
+from test.nodes.harness import emulated_run
 
 pytest.importorskip("serial", reason="python-can's slcan interface needs pyserial")
 
@@ -65,12 +63,7 @@ def test_emulator_frames_over_slcan_decode_to_the_run_it_plays(tmp_path: Path) -
             emulator.wait(10)
         log.close()
 
-    run = precompute_run(
-        load_rig(common.config_path("rig_default.yaml")),
-        RUN["simulator"],
-        schedule=PulsingSchedule(ramp_s=RUN["ramp_s"], pulsing_s=RUN["pulsing_s"]),
-        seed=RUN["seed"],
-    )
+    run = emulated_run(RUN)
     hydraulic = [s for s in got if s.frame == "BRAKE_HYDRAULIC"]
     assert len(hydraulic) > 0.8 * run.samples  # all but what was sent before the DAQ opened
     for sample in got:
@@ -128,12 +121,7 @@ def test_a_stalled_can_reader_gets_every_frame_late_and_loses_none(tmp_path: Pat
     dropped every frame that found the pty full. Holding a frame (``can_hold_s``) until the
     reader reads again delivers every one, late; without the hold the same stall loses the
     frames that found the pty full (the second case, which also shows the stall filled it)."""
-    run = precompute_run(
-        load_rig(common.config_path("rig_default.yaml")),
-        "lti",
-        schedule=PulsingSchedule(ramp_s=0.5, pulsing_s=0.5),  # 1000 samples, 44 KB of slcan
-        seed=3,
-    )
+    run = emulated_run(RUN, pulsing_s=0.5)  # 1000 samples, 44 KB of slcan
     rows = [{key: float(v[k]) for key, v in run.measured.items()} for k in range(run.samples)]
     results = []
     for hold_s in (30.0, 0.0):

@@ -18,7 +18,7 @@ import pytest
 
 from brake_hil.app.chain import start_node, stop_node
 from brake_hil.nodes import common
-from brake_hil.nodes.comparator import NO_MATCH_S
+from brake_hil.nodes.comparator_node import NO_MATCH_S
 from brake_hil.topics import MEASURED_OUTPUTS, PREDICTED_OUTPUTS
 from test.nodes.faults import MS, SamplePublisher
 from test.nodes.harness import Collector, ros_domain, unique_domain_id

@@ -7,8 +7,8 @@ two-process``, ``--layout paired``) predicts and records every sample, exits 0 a
 MCAP that reads back (paired: every sample stepped on the source's thread); bad parameters
 of one node end the container with exit 2 and one line, after the nodes already built were
 closed; SIGTERM mid-run stops every node in order and loses nothing the source had
-published. Counts and contracts only, with generous deadlines (never timing: the CI runner is
-a busy 2-core machine).
+published. Counts and contracts only, with generous deadlines (never timing: a test host may be
+a busy 2-core one).
 """
 
 from __future__ import annotations

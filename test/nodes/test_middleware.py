@@ -89,7 +89,7 @@ def test_a_node_with_the_loopback_profile_talks_over_loopback(tmp_path: Path) ->
 
 @pytest.mark.xfail(
     strict=True,
-    reason="issue 10, blocked: rmw_fastrtps's LOCALHOST mode (the project's rule for every "
+    reason="blocked: rmw_fastrtps's LOCALHOST mode (the project's rule for every "
     "node) adds an UDPv4 transport of its own with no interface allowlist beside the profile's, "
     "in code no profile reaches; its send sockets bind 0.0.0.0 and the external interface's "
     "address. Binding loopback only takes the range SYSTEM_DEFAULT with the profile alone",

@@ -106,7 +106,7 @@ def run_until_the_disk_fills(
             status = process.wait(90)  # it must stop on its own
             publisher.stop.set()
             # its status was acknowledged before it exited; the collector's thread may take
-            # it later on a busy runner (a quiet CI run once read none after 0.5 s)
+            # it later on a busy host (a quiet one can read none after 0.5 s)
             wait_until(lambda: recorder_statuses(collector), 10.0)
             time.sleep(0.5)  # and nothing more comes
     finally:

@@ -15,11 +15,8 @@ import numpy as np
 
 from brake_hil.app.chain import ros_environment
 from brake_hil.io.recording_reader import read_recording
-from brake_hil.nodes import common
-from brake_hil.nodes.rig_emulator import precompute_run
-from brake_hil.physics.excitation import PulsingSchedule
-from brake_hil.physics.rig import load_rig
 from brake_hil.topics import MEASURED_OUTPUTS
+from test.nodes.harness import emulated_run
 
 RUN = {"simulator": "lti", "ramp_s": 0.5, "pulsing_s": 1.0, "seed": 7}
 
@@ -62,12 +59,7 @@ def test_recording_of_the_emulated_rig_is_the_run_it_played(tmp_path: Path) -> N
                 process.wait(10)
         log.close()
 
-    run = precompute_run(
-        load_rig(common.config_path("rig_default.yaml")),
-        RUN["simulator"],
-        schedule=PulsingSchedule(ramp_s=RUN["ramp_s"], pulsing_s=RUN["pulsing_s"]),
-        seed=RUN["seed"],
-    )
+    run = emulated_run(RUN)
     recording = read_recording(tmp_path / "bag", required=MEASURED_OUTPUTS)
     assert recording.time.size == run.samples, (tmp_path / "nodes.log").read_text()
     steps_ns = np.round(np.diff(recording.time) * 1e9)
