@@ -44,6 +44,8 @@ ROS_FREE = (
 
 MAX_MODULE_LINES = 600
 """A module over this many lines holds more than one concern: split it."""
+MAX_FUNCTION_LINES = 80
+"""A function over this many lines does more than one step: name its steps."""
 
 
 def module_name(path: Path) -> str:
@@ -168,3 +170,16 @@ def test_no_module_is_over_the_line_limit() -> None:
     }
     too_long = [f"{name}: {n} lines" for name, n in lengths.items() if n > MAX_MODULE_LINES]
     assert too_long == [], f"over {MAX_MODULE_LINES} lines: split by concern"
+
+
+def test_no_function_is_over_the_line_limit() -> None:
+    too_long = [
+        f"{path.relative_to(PACKAGE.parent).as_posix()}:{node.lineno} {node.name}: "
+        f"{node.end_lineno - node.lineno + 1} lines"
+        for path in sorted(PACKAGE.rglob("*.py"))
+        for node in ast.walk(ast.parse(path.read_text()))
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef))
+        and node.end_lineno is not None
+        and node.end_lineno - node.lineno + 1 > MAX_FUNCTION_LINES
+    ]
+    assert too_long == [], f"over {MAX_FUNCTION_LINES} lines: name the steps"

@@ -22,7 +22,7 @@ import numpy as np
 from brake_hil.results.store import CalibrationValue, DiagnosisRow, HypothesisRow
 
 REAL_DIAGNOSIS = Path(__file__).with_name("diagnosis_one_washer_open.json")
-"""``brake-hil diagnose bags/one_washer_open``'s ``diagnosis.json`` (2026-11-26), kept with the
+"""``brake-hil diagnose bags/one_washer_open``'s ``diagnosis.json``, kept with the
 tests: a fresh clone has no ``out/`` (the test that it is still what the command writes is in
 ``test_store.py``)."""
 DAY_NS = 86_400 * 10**9

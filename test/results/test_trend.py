@@ -24,8 +24,7 @@ from test.results.fleets import real_document, rows, steady_fleet, wearing_fleet
 def test_a_steady_rig_gets_no_line_in_at_least_99_percent_of_fleets() -> None:
     # 200 steady fleets of 30 runs: values at offsets within their band with heavy-tailed,
     # day-to-day correlated scatter up to a third of the tolerance, effects steady (named or
-    # not). Measured 2026-11-25: 2 of these 200 fleets got a line (1.0 %); 13 of 2000 fleets
-    # with seeds 0-1999 (0.65 %).
+    # not): at most 1 % of them may get a line (docs/benchmarks.md has the measured rate).
     noisy = [seed for seed in range(200) if rig_trend(rows(steady_fleet(_rng(seed)))).findings]
     assert len(noisy) <= 2, noisy
 
