@@ -192,6 +192,7 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         recording=str(recording.path),
         effects=verdict.effects,
         confidence=verdict.confidence,
+        confidence_capped=verdict.capped,
         explanation=explanation,
         evidence=evidence,
         calibration=calibration,

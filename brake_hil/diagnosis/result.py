@@ -19,7 +19,7 @@ from brake_hil.diagnosis.physics_checks import CheckOutcome, unidentified
 from brake_hil.diagnosis.residual_forms import ResidualDescription
 from brake_hil.diagnosis.summary import Summary
 from brake_hil.diagnosis.thresholds import NOISE_EXCESS
-from brake_hil.diagnosis.verdict import Verdict, fit_gain, fit_score
+from brake_hil.diagnosis.verdict import Verdict, confidence_text, fit_gain, fit_score
 
 __all__ = ["Diagnosis", "explain"]
 
@@ -49,6 +49,11 @@ class Diagnosis:
     unfitted: tuple[str, ...] = ()  # hypotheses left out: not finite where their fit starts
     checks: dict[str, list[CheckOutcome]] = field(default_factory=dict)  # physics checks run
     residual: ResidualDescription | None = None  # what an unexplained misfit looks like
+    confidence_capped: str | None = None  # Verdict.capped: the cap's words, or None
+
+    def confidence_text(self) -> str:
+        """The confidence as printed: ``0.83``, or the cap's words (no number) when capped."""
+        return confidence_text(self.confidence, self.confidence_capped)
 
     def improved_model(self, rig_path: Path) -> ImprovedModel:
         """The improved model in the form the caliper-model node loads."""
@@ -75,6 +80,7 @@ class Diagnosis:
             "verdict": {
                 "effects": list(self.effects),
                 "confidence": round(self.confidence, 3),
+                **self._capped(),
                 "explanation": self.explanation,
                 **self._unexplained_form(),
                 **self._doubt(),
@@ -126,18 +132,29 @@ class Diagnosis:
             },
         }
 
+    def _capped(self) -> dict[str, object]:
+        """``confidence_capped`` (and its words) when a rule's fixed cap set the confidence."""
+        if self.confidence_capped is None:
+            return {}
+        return {"confidence_capped": True, "confidence_cap": self.confidence_capped}
+
     def _doubt(self) -> dict[str, object]:
         """The verdict's doubt, for a single that may not be alone (:meth:`Summary.doubt`).
 
         ``not_sure_alone``: why, in words; ``possible_second_effect``: the other effect of
-        the pair that betters it (:meth:`Summary.hidden_partner`), when that is why.
+        the pair that betters it (:meth:`Summary.hidden_partner`), when that is why and that
+        effect passes its physics checks (its signature seen, its values physical).
         """
         doubt = self.summary.doubt(self.effects)
         if doubt is None:
             return {}
         name = self.effects[0]
         partner = None if name in self.summary.not_alone else self.summary.hidden_partner(name)
-        second = {"possible_second_effect": partner[0]} if partner is not None else {}
+        second = (
+            {"possible_second_effect": partner[0]}
+            if partner is not None and partner[0] is not None
+            else {}
+        )
         return {"not_sure_alone": doubt, **second}
 
     def _unexplained_form(self) -> dict[str, object]:
@@ -189,6 +206,11 @@ def explain(
     doubt = summary.doubt(chosen.effects) if chosen is not None else None
     if doubt is not None:
         explanation += f" Not sure it is alone: {doubt}."
+    if verdict.capped is not None:
+        explanation += (
+            f" How sure: likely, {verdict.capped}; the confidence is that rule's cap, "
+            "not a measured one."
+        )
     if verdict.effects == ("unexplained",):
         explanation += f" {residual.summary[0].upper()}{residual.summary[1:]}."
     return explanation

@@ -74,6 +74,12 @@ class Summary:
         if partner is None:
             return None
         other, cut = partner
+        if other is None:
+            return (
+                f"a pair with it leaves {cut:.2f} times less of the error than {effects[0]} "
+                "alone: a second effect is likely; not identified (no effect that cuts it so "
+                "has its signature in the evidence and physical fitted values)"
+            )
         return (
             f"with {other} beside it the fit leaves {cut:.2f} times less of the error than "
             f"{effects[0]} alone: a second effect too small a share of the baseline's error "
@@ -86,13 +92,17 @@ class Summary:
         single = next((h for h in self.singles if h.effects == (name,)), None)
         return single is not None and single.held_out_cost > NOISE_EXCESS * self.floor_cost
 
-    def hidden_partner(self, name: str) -> tuple[str, float] | None:
-        """The second effect of the best pair with single ``name``, and its cut; or None.
+    def hidden_partner(self, name: str) -> tuple[str | None, float] | None:
+        """The second effect beside single ``name`` and the cut of a pair with it; or None.
 
-        The cut is how many times the pair cuts the error ``name`` leaves; None unless it is
-        ``HIDDEN_PARTNER_RATIO`` or more. Only for a single that leaves more than
-        ``NOISE_EXCESS`` times the noise's share: under that, no second effect is there to
-        find.
+        The cut is how many times the best pair with ``name`` (plausible, not set aside)
+        cuts the error ``name`` leaves; None unless it is ``HIDDEN_PARTNER_RATIO`` or more.
+        The second effect is named only when its physics checks pass: its own signature is
+        in the evidence (the single's ``consistent``) and the pair's fitted values describe
+        its physics (``plausible``), and that pair too cuts ``HIDDEN_PARTNER_RATIO`` times;
+        else it is None (a second effect is likely, not identified). Only for a single that
+        leaves more than ``NOISE_EXCESS`` times the noise's share: under that, no second
+        effect is there to find.
         """
         single = next((h for h in self.singles if h.effects == (name,)), None)
         if single is None or not self.leaves_beyond_noise(name):
@@ -106,8 +116,18 @@ class Summary:
         if best is None:
             return None
         cut = ratio(single.held_out_cost, best.held_out_cost)
-        other = next(e for e in best.effects if e != name)
-        return (other, cut) if cut >= HIDDEN_PARTNER_RATIO else None
+        if cut < HIDDEN_PARTNER_RATIO:
+            return None
+        seen = {h.effects[0] for h in self.singles if h.consistent}
+        shown = [
+            p
+            for p in pairs
+            if all(e in seen for e in p.effects if e != name)
+            and ratio(single.held_out_cost, p.held_out_cost) >= HIDDEN_PARTNER_RATIO
+        ]
+        named = min(shown, key=lambda p: p.held_out_cost, default=None)
+        other = None if named is None else next(e for e in named.effects if e != name)
+        return other, cut
 
     @property
     def floor_cost(self) -> float:

@@ -86,8 +86,10 @@ Evidence: docs/diagnosis.md.
 STAND_IN_MARGIN = 0.0
 """Decision margin (log units) a verdict keeps at most when its standing is in doubt.
 
-When a better-scoring hypothesis failed a physics check, or the single named may not be alone
-(``Candidate.not_alone``, ``HIDDEN_PARTNER_RATIO``): confidence at most about 0.71.
+When a better-scoring hypothesis failed a physics check, or the single named carries another
+physics in its own values (``Candidate.not_alone``): confidence at most about 0.71, and said
+in words, not as a measured number, when the cap binds (``Verdict.capped``). A single a pair
+betters (``HIDDEN_PARTNER_RATIO``) is charged that rule's own margin instead.
 Evidence: docs/diagnosis.md.
 """
 HIDDEN_PARTNER_RATIO = 1.4

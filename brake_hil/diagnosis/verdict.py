@@ -18,6 +18,7 @@ from brake_hil.diagnosis.thresholds import (
     CONFIDENCE_OFFSET,
     CONFIDENCE_SLOPE,
     FORM_RATIO,
+    HIDDEN_PARTNER_RATIO,
     NOISE_EXCESS,
     PAIR_RATIO,
     PAIR_SHARE,
@@ -32,7 +33,10 @@ from brake_hil.diagnosis.thresholds import (
 )
 
 __all__ = [
+    "NOT_ALONE",
+    "SET_ASIDE",
     "Verdict",
+    "confidence_text",
     "decide",
     "fit_gain",
     "fit_score",
@@ -45,6 +49,12 @@ __all__ = [
 ]
 
 
+NOT_ALONE = "not sure it is alone"
+"""The words of a confidence capped because the single named may not be alone."""
+SET_ASIDE = "a better fit failed a physics check"
+"""The words of a confidence capped because a better-scoring hypothesis was set aside."""
+
+
 @dataclass(frozen=True)
 class Verdict:
     """The decision: effects named, its confidence, and which hypothesis models them."""
@@ -53,6 +63,18 @@ class Verdict:
     confidence: float
     chosen: tuple[str, ...] | None  # effects of the hypothesis kept as improved model
     margin: float = math.inf  # the smallest decision margin (log units) the confidence is of
+    # Why a rule capped the confidence at a fixed value (``STAND_IN_MARGIN``) below what the
+    # evidence gives, in words; None when the confidence is the evidence's own
+    capped: str | None = None
+
+    def confidence_text(self) -> str:
+        """The confidence as printed: a number when measured, the cap's words when capped."""
+        return confidence_text(self.confidence, self.capped)
+
+
+def confidence_text(confidence: float, capped: str | None) -> str:
+    """``0.83``, or ``likely, not sure it is alone`` for a capped confidence (no number)."""
+    return f"{confidence:.2f}" if capped is None else f"likely, {capped}"
 
 
 def fit_gain(baseline: Fit, fitted: Fit) -> float:
@@ -287,8 +309,29 @@ def _holds_everywhere(summary: Summary, h: Hypothesis) -> bool:
     )
 
 
-def _caps(summary: Summary, standing: _Standing) -> list[float]:
-    """The margins (log units) the verdict may keep at most, whatever it is."""
+@dataclass(frozen=True)
+class _Caps:
+    """The margins (log units) a verdict may keep at most, whatever it is.
+
+    ``fixed``: a rule's fixed cap (``STAND_IN_MARGIN``) and its words, where no number of
+    the evidence measures the doubt; ``measured``: caps that are margins of the evidence
+    (the pair's cut of a single's leftover, the distance below the generic forms' bar).
+    """
+
+    fixed: list[tuple[float, str]]
+    measured: list[float]
+
+    def apply(self, margins: list[float]) -> tuple[float, str | None]:
+        """The least margin and, when a fixed cap is what binds, its words."""
+        least = min(margins + self.measured)
+        cap = min(self.fixed, default=None)
+        if cap is not None and cap[0] < least:
+            return cap[0], cap[1]
+        return least, None
+
+
+def _caps(summary: Summary, standing: _Standing) -> _Caps:
+    """The caps on the verdict's margin (:class:`_Caps`)."""
     chosen = standing.chosen
     # A hypothesis that would have been named but failed a physics check: the verdict that
     # replaces it is no surer than STAND_IN_MARGIN allows.
@@ -299,11 +342,19 @@ def _caps(summary: Summary, standing: _Standing) -> list[float]:
         and _gain(summary, h) >= standing.required
         and h.plausible
     ]
-    cap = [STAND_IN_MARGIN] if rejected else []
-    # A single whose own fitted values show another physics beside it (Candidate.not_alone),
-    # or that a pair with it betters (HIDDEN_PARTNER_RATIO): named alone, no surer than a
-    # stand-in's replacement.
-    cap += [STAND_IN_MARGIN] if chosen is not None and summary.doubt(chosen.effects) else []
+    fixed = [(STAND_IN_MARGIN, SET_ASIDE)] if rejected else []
+    measured: list[float] = []
+    # A single whose own fitted values show another physics beside it (Candidate.not_alone):
+    # named alone, no surer than a stand-in's replacement (nothing measures how likely).
+    # One that a pair with it betters (HIDDEN_PARTNER_RATIO): the margin of that rule, the
+    # more the pair cuts its leftover the less sure it is alone.
+    if chosen is not None and len(chosen.effects) == 1:
+        name = chosen.effects[0]
+        partner = summary.hidden_partner(name)
+        if name in summary.not_alone:
+            fixed.append((STAND_IN_MARGIN, NOT_ALONE))
+        if partner is not None:
+            measured.append(math.log(HIDDEN_PARTNER_RATIO / partner[1]))
     # Hypotheses that would have been named (before the chosen one) but for a generic form
     # doing as well: the verdict is no surer than the nearest stayed below that bar.
     passing = standing.passing
@@ -311,11 +362,11 @@ def _caps(summary: Summary, standing: _Standing) -> list[float]:
         math.log(FORM_RATIO * summary.form_bar(h.effects)) - standing.log_gains[h.effects]
         for h in passing[: passing.index(chosen) if chosen is not None else len(passing)]
     ]
-    cap += [min(below_bar)] if below_bar else []
-    return cap
+    measured += [min(below_bar)] if below_bar else []
+    return _Caps(fixed, measured)
 
 
-def _named(summary: Summary, standing: _Standing, chosen: Hypothesis, cap: list[float]) -> Verdict:
+def _named(summary: Summary, standing: _Standing, chosen: Hypothesis, cap: _Caps) -> Verdict:
     """The verdict naming ``chosen``, sure by its smallest margin from the rules."""
     log_gains = standing.log_gains
     own = log_gains[chosen.effects]
@@ -325,8 +376,8 @@ def _named(summary: Summary, standing: _Standing, chosen: Hypothesis, cap: list[
         margins += _single_margins(summary, chosen, own, log_gains)
     else:
         margins += _pair_margins(chosen, own, log_gains)
-    least = min(margins + cap)
-    return Verdict(chosen.effects, _confidence(least), chosen.effects, least)
+    least, capped = cap.apply(margins)
+    return Verdict(chosen.effects, _confidence(least), chosen.effects, least, capped)
 
 
 def _single_margins(
@@ -368,7 +419,7 @@ def _pair_margins(
     return margins
 
 
-def _not_named(summary: Summary, standing: _Standing, cap: list[float]) -> Verdict:
+def _not_named(summary: Summary, standing: _Standing, cap: _Caps) -> Verdict:
     """``unexplained`` or none, sure by the nearest miss of the rules.
 
     Unexplained (rather than none) when the misfit is large, or structured: a generic form
@@ -385,12 +436,11 @@ def _not_named(summary: Summary, standing: _Standing, cap: list[float]) -> Verdi
         *(log_gains[h.effects] - math.log(required) for h in passing),
     )
     unexplained = max(beyond) > 0 or bool(passing)
-    margin = min(
-        math.log(required) - best,
-        max(beyond) if unexplained else -max(beyond),
-        *cap,
+    margin, capped = cap.apply(
+        [math.log(required) - best, max(beyond) if unexplained else -max(beyond)]
     )
-    return Verdict(("unexplained",) if unexplained else (), _confidence(margin), None, margin)
+    effects = ("unexplained",) if unexplained else ()
+    return Verdict(effects, _confidence(margin), None, margin, capped)
 
 
 def weak_single(summary: Summary) -> Verdict | None:

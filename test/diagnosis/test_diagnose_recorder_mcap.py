@@ -77,8 +77,14 @@ def test_diagnose_names_the_effect_in_a_split_recorder_mcap(tmp_path: Path) -> N
     kept = json.loads(KEPT_DIAGNOSIS.read_text())
     assert set(document) == set(kept)
     for part in ("calibration", "verdict", "baseline", "improved"):
-        # only when unexplained, or when a single may not be alone
-        optional = {"unexplained_form", "not_sure_alone", "possible_second_effect"}
+        # only when unexplained, when a single may not be alone, or a rule capped the confidence
+        optional = {
+            "unexplained_form",
+            "not_sure_alone",
+            "possible_second_effect",
+            "confidence_capped",
+            "confidence_cap",
+        }
         assert set(document[part]) - optional == set(kept[part]) - optional, part
     assert set(document["hypotheses"][0]) == set(kept["hypotheses"][0])
     metrics = document["baseline"]["metrics"]["F_k"]

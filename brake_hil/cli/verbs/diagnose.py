@@ -115,7 +115,7 @@ def diagnose_one(args: argparse.Namespace) -> int:
     json_written(result.json_path)
     print(f"improved model written to {result.improved_model_path} (caliper_model loads it)")
     verdict = ", ".join(diagnosis.effects) or "none (the calibrated LTI model suffices)"
-    print(f"verdict: {verdict} (confidence {diagnosis.confidence:.2f})")
+    print(f"verdict: {verdict} (confidence {diagnosis.confidence_text()})")
     print(diagnosis.explanation)
     print(f"report: {result.report_path}")
     stored = append_diagnosis(args.recording, rig, result.json_path, database)
@@ -130,6 +130,7 @@ def diagnose_many(args: argparse.Namespace) -> int:
     reason on stderr; the others finished and are in the database).
     """
     from brake_hil.app.diagnose_many import run_diagnose_many
+    from brake_hil.diagnosis.verdict import confidence_text
 
     out = args.out if args.out is not None else Path("out")
     with ExitStack() as stack:
@@ -144,7 +145,9 @@ def diagnose_many(args: argparse.Namespace) -> int:
                 done = outcome.value
                 verdict = ", ".join(done.effects) or "none"
                 seconds = f"{done.seconds:.1f} s"
-                bar.write(f"{done.job.recording}: {verdict} ({done.confidence:.2f}, {seconds})")
+                cap = done.document["verdict"].get("confidence_cap")
+                sure = confidence_text(done.confidence, cap if isinstance(cap, str) else None)
+                bar.write(f"{done.job.recording}: {verdict} ({sure}, {seconds})")
             bar.finished(outcome.ok)
 
         result = run_diagnose_many(
