@@ -250,5 +250,8 @@ def test_a_subtle_second_effect_under_a_strong_one_leaves_the_verdict_unsure(
     assert ("eccentric_load", "entrained_air") in {p.effects for p in result.summary.pairs}
     verdict = result.as_dict()["verdict"]
     assert isinstance(verdict, dict)
-    assert verdict["possible_second_effect"] == "entrained_air", verdict
-    assert "Not sure it is alone: with entrained_air beside it" in result.explanation
+    # the air is too subtle for its own signature (a bore pressure mispredicted over 1 %):
+    # a second effect whose physics checks do not pass is not named, only said likely
+    assert "possible_second_effect" not in verdict, verdict
+    assert "a second effect is likely; not identified" in str(verdict["not_sure_alone"])
+    assert "Not sure it is alone: a pair with it leaves" in result.explanation
