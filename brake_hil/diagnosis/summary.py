@@ -98,7 +98,8 @@ class Summary:
         The cut is how many times the best pair with ``name`` (plausible, not set aside)
         cuts the error ``name`` leaves; None unless it is ``HIDDEN_PARTNER_RATIO`` or more.
         The second effect is named only when its physics checks pass: its own signature is
-        in the evidence (the single's ``consistent``) and the pair's fitted values describe
+        in the evidence (the single's ``consistent``), its values fitted alone are one
+        instance of its physics (not in :attr:`not_alone`), the pair's fitted values describe
         its physics (``plausible``), and that pair too cuts ``HIDDEN_PARTNER_RATIO`` times;
         else it is None (a second effect is likely, not identified). Only for a single that
         leaves more than ``NOISE_EXCESS`` times the noise's share: under that, no second
@@ -118,7 +119,9 @@ class Summary:
         cut = ratio(single.held_out_cost, best.held_out_cost)
         if cut < HIDDEN_PARTNER_RATIO:
             return None
-        seen = {h.effects[0] for h in self.singles if h.consistent}
+        # its own fit alone must describe one instance of its physics too (not_alone: a
+        # delay whose skew and common lag are a lag of the line, as air's, is not a delay)
+        seen = {h.effects[0] for h in self.singles if h.consistent} - set(self.not_alone)
         shown = [
             p
             for p in pairs
