@@ -101,7 +101,7 @@ class ComparatorNode(common.LoopNode):
         self._sample_period_ns = round(sample_period * 1e9)
         span = round((self._window_cycles + 2) * self.period_s / sample_period)
         self.pairers = {
-            channel: StampPairer(capacity=span + 500, max_pending=max(2000, span))
+            channel: StampPairer(capacity=span + 500)  # unpaired samples wait 30 s of stamps
             for channel in OUTPUT_CHANNELS
         }
         self.cycles: dict[str, list[dict[str, float]]] = {c: [] for c in OUTPUT_CHANNELS}
@@ -109,6 +109,7 @@ class ComparatorNode(common.LoopNode):
         self._no_match: dict[str, float | None] = dict.fromkeys(OUTPUT_CHANNELS)
         self.no_match_reports = 0  # evaluations at which a channel had no match
         self._period_ns = round(self.period_s * 1e9)
+        self._span_ns = (self._window_cycles + 2) * self._period_ns
         self._next_cycle_end: int | None = None  # stamp (ns) ending the next cycle to score
         self._aligned = False  # cycles start at a peak of p_b (after the first steady window)
         self.evaluations = 0  # cycles evaluated
@@ -168,7 +169,7 @@ class ComparatorNode(common.LoopNode):
             first = min(int(w.stamps_ns[0]) for w in windows.values() if w.stamps_ns.size)
             self._next_cycle_end = first + (self._window_cycles + 1) * self._period_ns
         published = False
-        while self._next_cycle_end + self._period_ns <= max(newest):
+        while self._next_cycle_end + self._period_ns <= self._covered_until(newest):
             statuses, steady = self._statuses(windows, self._next_cycle_end)
             self._publish(statuses)
             self._next_cycle_end += self._period_ns
@@ -177,6 +178,17 @@ class ComparatorNode(common.LoopNode):
                 self._align(windows[OUTPUT_CHANNELS[0]])
         if not published and (self.evaluations == 0 or no_match):
             self._publish(self._statuses(windows, None)[0])
+
+    def _covered_until(self, newest: list[int]) -> int:
+        """The newest stamp (ns) every channel's pairs reach: a cycle is scored once all have it.
+
+        Channels pair at their own pace on a busy machine (a channel scored before its pairs
+        arrive would miss that cycle for good); a channel more than a window behind the others
+        (one that stopped pairing) no longer holds them back.
+        """
+        if len(newest) < len(self.pairers) or max(newest) - min(newest) > self._span_ns:
+            return max(newest)
+        return min(newest)
 
     def _align(self, window: PairedWindow) -> None:
         """Once: move the cycle grid so cycles start at a peak of the measured bore pressure.
@@ -257,6 +269,7 @@ class ComparatorNode(common.LoopNode):
             ("paired", pairer.paired),
             ("unpaired_predicted", pairer.unpaired_predicted),
             ("unpaired_measured", pairer.unpaired_measured),
+            *((f"unpaired_{why}", n) for why, n in pairer.unpaired_reasons.items()),
             ("pending_predicted", pending_predicted),
             ("pending_measured", pending_measured),
             ("cycle_end_stamp_ns", -1 if cycle_end is None else cycle_end),
@@ -299,7 +312,9 @@ class ComparatorNode(common.LoopNode):
                 entry["level"] = common.LEVEL_NAMES[self.thresholds.level(entry)]
             pairer = self.pairers[channel]
             entry["paired"] = pairer.paired
-            entry["unpaired"] = pairer.unpaired_predicted + pairer.unpaired_measured
+            reasons = pairer.unpaired_now()  # those still waiting count as unpaired now
+            entry["unpaired"] = sum(reasons.values())
+            entry["unpaired_reasons"] = reasons
             channels[channel] = entry
         return {"window_cycles": self._window_cycles, "metrics": channels}
 
