@@ -6,7 +6,7 @@ window, OK/WARN/ERROR thresholds.
 
 from __future__ import annotations
 
-from collections import deque
+import bisect
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 import math
@@ -89,11 +89,12 @@ class StampPairer:
     an equal one (stamps that never match: an offset, another clock, a sample lost on the other
     side), ``behind`` when the other side had not reached it (no partner within the horizon).
     ``max_pending`` caps each side (a safety bound: stamps out of order), dropped as ``behind``.
-    Memory: at most ``max_pending`` samples a side. Paired samples are kept in a ring of
-    ``capacity``. Not thread-safe: feed it from one thread.
+    Memory: at most ``max_pending`` samples a side. The newest ``capacity`` pairs are kept in
+    stamp order (30 s by default: a consumer that takes them late still finds its windows).
+    Not thread-safe: feed it from one thread.
     """
 
-    capacity: int = 4000
+    capacity: int = HORIZON_NS // 1_000_000
     horizon_ns: int = HORIZON_NS
     max_pending: int = 2 * HORIZON_NS // 1_000_000
     paired: int = 0
@@ -105,10 +106,7 @@ class StampPairer:
     _predicted: dict[int, float] = field(default_factory=dict, repr=False)
     _measured: dict[int, float] = field(default_factory=dict, repr=False)
     _newest: list[int | None] = field(default_factory=lambda: [None, None], repr=False)
-    _pairs: deque[tuple[int, float, float]] = field(init=False, repr=False)
-
-    def __post_init__(self) -> None:
-        self._pairs = deque(maxlen=self.capacity)
+    _pairs: list[tuple[int, float, float]] = field(default_factory=list, repr=False)
 
     def add_predicted(self, stamp_ns: int, value: float) -> None:
         """One predicted sample."""
@@ -116,8 +114,7 @@ class StampPairer:
         if partner is None:
             self._wait(0, stamp_ns, value)
         else:
-            self._pairs.append((stamp_ns, value, partner))
-            self.paired += 1
+            self._pair(stamp_ns, value, partner)
             self._see(0, stamp_ns)
 
     def add_measured(self, stamp_ns: int, value: float) -> None:
@@ -126,9 +123,20 @@ class StampPairer:
         if partner is None:
             self._wait(1, stamp_ns, value)
         else:
-            self._pairs.append((stamp_ns, partner, value))
-            self.paired += 1
+            self._pair(stamp_ns, partner, value)
             self._see(1, stamp_ns)
+
+    def _pair(self, stamp_ns: int, predicted: float, measured: float) -> None:
+        """Keep a pair in stamp order (pairs come mostly in order: an append), newest kept."""
+        pairs = self._pairs
+        entry = (stamp_ns, predicted, measured)
+        if not pairs or stamp_ns >= pairs[-1][0]:
+            pairs.append(entry)
+        else:
+            bisect.insort(pairs, entry)
+        self.paired += 1
+        if len(pairs) > self.capacity + 1000:  # trimmed in chunks: amortised O(1)
+            del pairs[: len(pairs) - self.capacity]
 
     def _see(self, side: int, stamp_ns: int) -> None:
         newest = self._newest[side]
@@ -178,9 +186,11 @@ class StampPairer:
                 counts["end" if reason == "behind" else reason] += 1
         return counts
 
-    def window(self) -> PairedWindow:
-        """The paired samples held, sorted by stamp."""
-        pairs = sorted(self._pairs)
+    def window(self, since_ns: int | None = None) -> PairedWindow:
+        """The paired samples held (those stamped ``since_ns`` or later), sorted by stamp."""
+        pairs = self._pairs
+        if since_ns is not None:
+            pairs = pairs[bisect.bisect_left(pairs, (since_ns,)) :]
         stamps = np.fromiter((p[0] for p in pairs), dtype=np.int64, count=len(pairs))
         predicted = np.fromiter((p[1] for p in pairs), dtype=np.float64, count=len(pairs))
         measured = np.fromiter((p[2] for p in pairs), dtype=np.float64, count=len(pairs))

@@ -101,7 +101,9 @@ class ComparatorNode(common.LoopNode):
         self._sample_period_ns = round(sample_period * 1e9)
         span = round((self._window_cycles + 2) * self.period_s / sample_period)
         self.pairers = {
-            channel: StampPairer(capacity=span + 500)  # unpaired samples wait 30 s of stamps
+            # unpaired samples wait 30 s of stamps, pairs are kept 30 s: a model that falls
+            # behind, or a comparator that takes seconds of samples at once, loses no cycle
+            channel: StampPairer(capacity=max(span, 30_000))
             for channel in OUTPUT_CHANNELS
         }
         self.cycles: dict[str, list[dict[str, float]]] = {c: [] for c in OUTPUT_CHANNELS}
@@ -153,7 +155,8 @@ class ComparatorNode(common.LoopNode):
 
     def _evaluate(self) -> None:
         """Score every cycle whose window (and guard period) the paired samples now cover."""
-        windows = {channel: pairer.window() for channel, pairer in self.pairers.items()}
+        since = None if self._next_cycle_end is None else self._next_cycle_end - self._span_ns
+        windows = {channel: pairer.window(since) for channel, pairer in self.pairers.items()}
         now = time.monotonic_ns()
         self._no_match = {
             channel: self._watches[channel].update(pairer, now)

@@ -72,3 +72,17 @@ def test_expected_cycles_count_the_steady_cycles_the_comparator_scores() -> None
     assert 15 <= counts["p_b"] <= 29
     stamps, ramp = _pulsing(8.0, 8.5)  # a ramp, no pulsing
     assert expected_cycles(stamps, {"p_b": ramp}) == {"p_b": 0}
+
+
+def test_pairs_taken_seconds_late_and_out_of_order_are_all_held_in_stamp_order() -> None:
+    pairer = StampPairer()  # pairs kept for 30 s
+    order = np.random.default_rng(3).permutation(10_000)  # 10 s, taken in one shuffled batch
+    for k in order:
+        pairer.add_measured(START + int(k) * MS, float(k))
+    for k in range(10_000):
+        pairer.add_predicted(START + k * MS, float(k))
+    stamps, predicted, measured = pairer.window()
+    assert stamps.size == 10_000 and np.all(np.diff(stamps) == MS)
+    assert np.array_equal(predicted, measured)
+    since = pairer.window(START + 9_000 * MS)
+    assert since.stamps_ns.size == 1_000 and since.stamps_ns[0] == START + 9_000 * MS
