@@ -33,6 +33,9 @@ from brake_hil.nodes.settings import ComparatorSettings
 from brake_hil.runtime import DeadlineLoop, Tick
 from brake_hil.topics import MEASURED_OUTPUTS, OUTPUT_CHANNELS, PREDICTED_OUTPUTS
 
+CHANNEL_LAG_NS = 10_000_000_000
+"""A channel whose pairs lag the others' by more than this (ns) no longer holds their scoring
+back (pairs are kept 30 s)."""
 NO_MATCH_S = 3.0
 """ERROR once both sides of a channel arrive but nothing has paired for this long (s)."""
 
@@ -111,7 +114,7 @@ class ComparatorNode(common.LoopNode):
         self._no_match: dict[str, float | None] = dict.fromkeys(OUTPUT_CHANNELS)
         self.no_match_reports = 0  # evaluations at which a channel had no match
         self._period_ns = round(self.period_s * 1e9)
-        self._span_ns = (self._window_cycles + 2) * self._period_ns
+        self._span_ns = (self._window_cycles + 2) * self._period_ns  # a window and its guards
         self._next_cycle_end: int | None = None  # stamp (ns) ending the next cycle to score
         self._aligned = False  # cycles start at a peak of p_b (after the first steady window)
         self.evaluations = 0  # cycles evaluated
@@ -153,8 +156,11 @@ class ComparatorNode(common.LoopNode):
                     continue
                 add(stamp, value)
 
-    def _evaluate(self) -> None:
-        """Score every cycle whose window (and guard period) the paired samples now cover."""
+    def _evaluate(self, final: bool = False) -> None:
+        """Score every cycle whose window (and guard period) the paired samples now cover.
+
+        ``final``: the run is over, score what any channel covers.
+        """
         since = None if self._next_cycle_end is None else self._next_cycle_end - self._span_ns
         windows = {channel: pairer.window(since) for channel, pairer in self.pairers.items()}
         now = time.monotonic_ns()
@@ -172,7 +178,7 @@ class ComparatorNode(common.LoopNode):
             first = min(int(w.stamps_ns[0]) for w in windows.values() if w.stamps_ns.size)
             self._next_cycle_end = first + (self._window_cycles + 1) * self._period_ns
         published = False
-        while self._next_cycle_end + self._period_ns <= self._covered_until(newest):
+        while self._next_cycle_end + self._period_ns <= self._covered_until(newest, final):
             statuses, steady = self._statuses(windows, self._next_cycle_end)
             self._publish(statuses)
             self._next_cycle_end += self._period_ns
@@ -182,14 +188,14 @@ class ComparatorNode(common.LoopNode):
         if not published and (self.evaluations == 0 or no_match):
             self._publish(self._statuses(windows, None)[0])
 
-    def _covered_until(self, newest: list[int]) -> int:
+    def _covered_until(self, newest: list[int], final: bool) -> int:
         """The newest stamp (ns) every channel's pairs reach: a cycle is scored once all have it.
 
         Channels pair at their own pace on a busy machine (a channel scored before its pairs
-        arrive would miss that cycle for good); a channel more than a window behind the others
-        (one that stopped pairing) no longer holds them back.
+        arrive would miss that cycle for good); a channel more than ``CHANNEL_LAG_NS`` behind
+        the others (one that stopped pairing) no longer holds them back, nor any at the end.
         """
-        if len(newest) < len(self.pairers) or max(newest) - min(newest) > self._span_ns:
+        if final or len(newest) < len(self.pairers) or max(newest) - min(newest) > CHANNEL_LAG_NS:
             return max(newest)
         return min(newest)
 
@@ -326,7 +332,7 @@ class ComparatorNode(common.LoopNode):
         self._loop.stop()
         if self.context.ok() and self._loop.error is None:
             self._take()
-            self._evaluate()
+            self._evaluate(final=True)
         summary = self.summary()
         for channel, entry in summary["metrics"].items():
             if entry["cycles"]:
