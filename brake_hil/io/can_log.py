@@ -39,7 +39,8 @@ import can
 from brake_hil.errors import RecordingError
 from brake_hil.io.can_acquisition import CanAcquisition
 from brake_hil.io.can_daq import CanDaq
-from brake_hil.io.replay import Output, StampMode
+from brake_hil.io.replay import Output
+from brake_hil.runtime import StampMode
 
 __all__ = ["LOG_READERS", "CanLogReplay", "read_can_log"]
 

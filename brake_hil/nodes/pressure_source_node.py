@@ -22,12 +22,13 @@ from rclpy.node import Node
 from brake_hil.errors import BrakeHilError
 from brake_hil.io.can_acquisition import CanAcquisition
 from brake_hil.io.can_log import CanLogReplay
-from brake_hil.io.replay import Replay, StampMode
+from brake_hil.io.replay import Replay
 from brake_hil.nodes import common
 from brake_hil.nodes.pressure_source import NAME
 from brake_hil.nodes.settings import PressureSourceSettings
 from brake_hil.runtime import (
     LoopStatistics,
+    StampMode,
     set_process_realtime_priority,
     set_realtime_priority,
     set_timer_slack,

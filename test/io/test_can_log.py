@@ -21,7 +21,7 @@ import pytest
 from brake_hil.errors import RecordingError
 from brake_hil.io.can_codec import RigFrameCodec
 from brake_hil.io.can_log import CanLogReplay, read_can_log
-from brake_hil.io.replay import StampMode
+from brake_hil.runtime import StampMode
 
 T0 = 1_700_000_000.0  # s, the log's first acquisition (epoch)
 PERIOD_S = 0.001
