@@ -20,9 +20,10 @@ RIG --layout L``, from a checkout's own ``.venv``) with N processes spinning
   ``bench_middleware_floor.py --variant separate`` (bare rclpy nodes that only publish and
   take the chain's messages) run under the same busy processes, in the same run.
 
-Variants (``--variant NAME=CHECKOUT:LAYOUT``, repeatable) are interleaved for each busy level
-(variant a, b, a, b, ... for ``--rounds``) so the shared machine's other load falls on all
-alike; the load average is printed with every row. Run from a checkout::
+Variants (``--variant NAME=CHECKOUT:LAYOUT[:PRIORITY]``, repeatable; PRIORITY is the chain's
+``--realtime-priority``) are interleaved for each busy level (variant a, b, a, b, ... for
+``--rounds``) so the shared machine's other load falls on all alike; the load average is
+printed with every row. Run from a checkout::
 
     .venv/bin/python benchmarks/bench_chain_busy.py --busy 0,1,2
         --variant before=../main:processes --variant after=.:processes
@@ -40,6 +41,7 @@ import os
 from pathlib import Path
 import re
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -71,6 +73,7 @@ class Variant:
     name: str
     checkout: Path
     layout: str
+    realtime_priority: int = 0
 
 
 @dataclass
@@ -153,18 +156,24 @@ def run_chain(variant: Variant, recording: Path, model: Path, out: Path) -> tupl
         str(variant.checkout / ".venv" / "bin" / "python"),
         *("-m", "brake_hil.nodes.chain", str(recording), "--model", str(model)),
         *("--out", str(out), "--layout", variant.layout),
+        *("--realtime-priority", str(variant.realtime_priority)),
     ]
     samples: list[tuple[float, dict[int, float]]] = []
     labels: dict[int, str] = {}
     with (out.parent / f"{out.name}.log").open("w") as log:
         chain = subprocess.Popen(command, cwd=variant.checkout, env=env, stdout=log, stderr=log)
-        while chain.poll() is None:
-            cpu = descendants_cpu(chain.pid)
-            for pid in cpu:
-                if pid not in labels:
-                    labels[pid] = _label(pid)
-            samples.append((time.time(), cpu))
-            time.sleep(POLL_S)
+        try:
+            while chain.poll() is None:
+                cpu = descendants_cpu(chain.pid)
+                for pid in cpu:
+                    if pid not in labels:
+                        labels[pid] = _label(pid)
+                samples.append((time.time(), cpu))
+                time.sleep(POLL_S)
+        except BaseException:  # interrupted: the chain stops its nodes itself on SIGINT
+            chain.send_signal(signal.SIGINT)
+            chain.wait(180.0)
+            raise
     named = [(t, {labels[p]: v for p, v in cpu.items() if p in labels}) for t, cpu in samples]
     return chain.returncode, named
 
@@ -172,19 +181,45 @@ def run_chain(variant: Variant, recording: Path, model: Path, out: Path) -> tupl
 # --------------------------------------------------------------------------- figures
 
 
-def replay_window(log: Path) -> tuple[float, float] | None:
-    """Wall times (s since the epoch) of the source's start and end of replay."""
+def replay_window(logs: Path) -> tuple[float, float] | None:
+    """Wall times (s since the epoch) of the source's first sample and end of replay.
+
+    From the source's log lines (its own log, or its container's): "...: starting" plus its
+    ``start_delay``, and "replay finished".
+    """
     start = end = None
-    with contextlib.suppress(OSError):
-        for line in log.read_text().splitlines():
-            match = LOG_TIME.match(line)
-            if match is None:
-                continue
-            if start is None and line.rstrip().endswith("starting"):
-                start = float(match.group(1))
-            elif "replay finished" in line:
-                end = float(match.group(1))
+    delay = 0.0
+    with contextlib.suppress(OSError, ValueError):
+        params = (logs / "pressure_source.params.yaml").read_text()
+        if (found := re.search(r"start_delay: ([\d.eE+-]+)", params)) is not None:
+            delay = float(found.group(1))
+    for log in sorted(logs.glob("*.log")):
+        with contextlib.suppress(OSError):
+            for line in log.read_text().splitlines():
+                match = LOG_TIME.match(line)
+                if match is None or "[pressure_source]" not in line:
+                    continue
+                if start is None and line.rstrip().endswith("starting"):
+                    start = float(match.group(1)) + delay
+                elif "replay finished" in line:
+                    end = float(match.group(1))
     return (start, end) if start is not None and end is not None else None
+
+
+def received_span(out: Path) -> tuple[float, float] | None:
+    """Wall times (s) of the first and last ``p_i`` the recorder received (its log times)."""
+    from mcap.reader import make_reader
+
+    first = last = None
+    for path in sorted(out.glob("*/*.mcap")):
+        with path.open("rb") as stream:
+            reader = make_reader(stream)
+            for _, channel, message in reader.iter_messages():
+                if channel.topic != MASTER_CYLINDER_PRESSURE.name:
+                    continue
+                first = message.log_time if first is None else min(first, message.log_time)
+                last = message.log_time if last is None else max(last, message.log_time)
+    return (first / 1e9, last / 1e9) if first is not None and last is not None else None
 
 
 def _cpu_at(samples: list, when: float) -> dict[str, float]:
@@ -241,7 +276,10 @@ def measure(variant: Variant, busy: int, recording: Path, model: Path, out: Path
     log = (out.parent / f"{out.name}.log").read_text()
     if (length := re.search(r"\(([\d.]+) s at rate", log)) is not None:
         run.length_s = float(length.group(1))
-    window = replay_window(out / "logs" / "pressure_source.log")
+    window = replay_window(out / "logs")
+    if window is None:  # an older source logs "starting" only after a wait over 1 s
+        window = received_span(out)
+        run.note = "(replay: p_i as the recorder received it)"
     if window is not None:
         run.replay_s = window[1] - window[0]
         run.cpu = window_cpu(samples, *window)
@@ -252,7 +290,7 @@ def measure(variant: Variant, busy: int, recording: Path, model: Path, out: Path
     predicted = int(model_stats.get("counters", {}).get("predictions", 0))
     run.lost = recorder_lost(out, published, predicted)
     if not run.cpu:
-        run.note = "no replay window in the source's log"
+        run.note = "no replay window: no source log, no p_i recorded"
     return run
 
 
@@ -322,12 +360,16 @@ def expected_cycles(checkout: Path, recording: Path, model: Path) -> int | None:
 
 
 def parse_variant(text: str) -> Variant:
-    """``NAME=CHECKOUT:LAYOUT``."""
+    """``NAME=CHECKOUT:LAYOUT[:PRIORITY]`` (PRIORITY: the chain's ``--realtime-priority``)."""
     name, _, rest = text.partition("=")
-    checkout, _, layout = rest.rpartition(":")
-    if not name or not checkout or not layout:
-        raise argparse.ArgumentTypeError(f"{text!r}: expected NAME=CHECKOUT:LAYOUT")
-    return Variant(name, Path(checkout).resolve(), layout)
+    checkout, layout, *priority = rest.split(":")
+    if not name or not checkout or not layout or len(priority) > 1:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected NAME=CHECKOUT:LAYOUT[:PRIORITY]")
+    try:
+        fifo = int(priority[0]) if priority else 0
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: PRIORITY must be an integer") from None
+    return Variant(name, Path(checkout).resolve(), layout, fifo)
 
 
 def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
@@ -341,7 +383,7 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
         "--variant",
         type=parse_variant,
         action="append",
-        help="NAME=CHECKOUT:LAYOUT, repeatable (default after=.:processes)",
+        help="NAME=CHECKOUT:LAYOUT[:PRIORITY], repeatable (default after=.:processes)",
     )
     parser.add_argument("--floor-seconds", type=float, default=10.0, help="0: no floor")
     parser.add_argument("--out", type=Path, default=PROJECT / "out" / "bench_chain_busy")
@@ -356,6 +398,8 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run every variant under every busy level, interleaved; print the table."""
     args = parse_args(argv)
+    signal.signal(signal.SIGINT, signal.default_int_handler)  # also when started with it ignored
+    signal.signal(signal.SIGTERM, signal.default_int_handler)
     expected = expected_cycles(args.variant[-1].checkout, args.recording, args.model)
     print(f"chain on {args.recording} with {args.model}; offline compare: {expected} cycles")
     print(f"{os.cpu_count()} CPUs; CPU % of one core; floor: bare rclpy, same traffic")

@@ -178,10 +178,9 @@ class PressureSourceNode(Node):
             short = {n: (count(n), c) for n, c in topics.items() if count(n) < c}
             pending = unmatched()
             if not short and not pending:
-                if time.monotonic() - started > 1.0:
-                    self.get_logger().info(
-                        f"subscribers matched after {time.monotonic() - started:.1f} s: starting"
-                    )
+                self.get_logger().info(
+                    f"subscribers matched after {time.monotonic() - started:.1f} s: starting"
+                )
                 return
             waiting = [f"{n} ({have} of {want})" for n, (have, want) in sorted(short.items())]
             waiting += [f"{n} (a subscriber not matched yet)" for n in pending if n not in short]
