@@ -69,6 +69,7 @@ class PressureSourceNode(Node):
         self._on_replay_end: list[Callable[[], None]] = []
         self._pair_lock = threading.Lock()
         self._replay_over = False
+        self._realtime = False  # the worker obtained SCHED_FIFO
         if self.mode == "replay":
             self._prepare_replay()
             target: Callable[[], None] = self._play
@@ -125,7 +126,7 @@ class PressureSourceNode(Node):
     def _start_worker(self) -> None:
         """On the worker thread: its timer slack and priority, then the wait for subscribers."""
         set_timer_slack(1)
-        set_realtime_priority(self.settings.realtime_priority)
+        self._realtime = set_realtime_priority(self.settings.realtime_priority)
         if self.mode != "can" or self._waits():
             self._wait_for_graph()
 
@@ -184,10 +185,9 @@ class PressureSourceNode(Node):
             short = {n: (count(n), c) for n, c in topics.items() if count(n) < c}
             pending = unmatched()
             if not short and not pending:
-                if time.monotonic() - started > 1.0:
-                    self.get_logger().info(
-                        f"subscribers matched after {time.monotonic() - started:.1f} s: starting"
-                    )
+                self.get_logger().info(
+                    f"subscribers matched after {time.monotonic() - started:.1f} s: starting"
+                )
                 return
             waiting = [f"{n} ({have} of {want})" for n, (have, want) in sorted(short.items())]
             waiting += [f"{n} (a subscriber not matched yet)" for n in pending if n not in short]
@@ -234,12 +234,14 @@ class PressureSourceNode(Node):
             self._stop.wait(settings.start_delay)
             self.state = "playing"
             outputs = [self._output(spec) for spec in replay.specs]
+            # A spin at normal priority buys no timing and takes the CPU the chain needs.
+            spin_us = settings.spin_margin_us if self._realtime else 0
             replay.play(
                 outputs,
                 self._stop,
                 settings.rate,
                 settings.loop,
-                settings.spin_margin_us,
+                spin_us,
                 self._followers,  # the list itself: a node paired later is seen
             )
         finally:
