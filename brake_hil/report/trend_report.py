@@ -275,8 +275,8 @@ third of the runs. A value outside its band in at least {OFFSET_SHARE:.0%} of th
 of runs, a run whose value sits {OUTSIDE_SIGMA:g} or more tolerances from the rig file's is
 said at once (red crosses). The trend test cannot pass on fewer than {TREND_RUNS} runs (a
 perfectly monotone series of {TREND_RUNS - 1} gives p above {SIGNIFICANCE:g}): such a series
-is "too few runs to test a trend", not steady. On steady synthetic rigs of 30 runs the trend
-rules wrote a line for under 1 % of fleets (the rate of each rule: docs/benchmarks.md).</p>"""
+is "too few runs to test a trend", not steady. On steady synthetic rigs of 30 runs these
+rules wrote a line for about 1 % of fleets (the rates: docs/benchmarks.md).</p>"""
 
 
 def _html(
