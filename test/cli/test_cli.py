@@ -341,3 +341,50 @@ def test_diagnose_and_benchmark_refuse_bad_input_with_one_line(
         args = ["benchmark", tmp_path / "empty"]
     line = _single_error_line(brake_hil(*args))
     assert str(tmp_path) in line
+
+
+BAGS = Path(__file__).resolve().parents[2] / "bags"
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["diagnose", "{missing}"],
+        ["diagnose", "{missing}", "--rig", RIG],
+        ["compare", "{missing}", "--json", "out/c.json", "--db", "out/r.sqlite"],
+        ["characterize", "{missing}", "--json", "out/c.json"],
+        ["regress", "{missing}", "--baseline", "out/b.json", "--update", "--db", "out/r.sqlite"],
+        # refused once opened (no steady pulsing): the folders made for it are gone again
+        ["compare", "{ramp}", "--json", "out/x/c.json", "--db", "out/r.sqlite"],
+        ["characterize", "{ramp}", "--json", "out/c.json"],
+    ],
+)
+def test_a_refused_command_writes_nothing(command: list[str | Path], tmp_path: Path) -> None:
+    missing = tmp_path / "bags" / "hose_compliance"  # a typo of effect_hose_compliance
+    paths = {"{missing}": missing, "{ramp}": BAGS / "ramp_one_washer"}
+    args = [paths.get(str(arg), arg) for arg in command]
+    done = brake_hil(*args, cwd=tmp_path)
+    assert done.returncode == 2, done.stdout + done.stderr
+    errors = [line for line in done.stderr.splitlines() if "error:" in line]
+    assert len(errors) == 1 and "Traceback" not in done.stderr
+    if args[1] == missing:
+        assert errors[0] == f"brake-hil {command[0]}: error: {missing}: no such recording"
+    assert not (tmp_path / "out").exists(), list((tmp_path / "out").rglob("*"))
+
+
+def test_compare_and_characterize_default_to_the_rig_file_beside_the_recording(
+    tmp_path: Path,
+) -> None:
+    bag = BAGS / "five_washer_open"
+    beside = BAGS / "five_washer_open.rig.yaml"
+    for command in ("compare", "characterize"):
+        done = brake_hil(command, bag)
+        assert done.returncode == 0, done.stderr
+        assert f"rig file: {beside} (beside the recording; --rig to choose another)" in (
+            done.stderr.splitlines()
+        )
+        assert f"recording {bag}  rig {beside} (" in done.stdout
+    told = brake_hil("compare", bag, "--rig", RIG, "--json", tmp_path / "c.json")
+    assert told.returncode == 0, told.stderr
+    assert "rig file:" not in told.stderr and f"rig {RIG} (" in told.stdout
+    assert json.loads((tmp_path / "c.json").read_text())["rig"] == str(RIG)
