@@ -17,8 +17,8 @@ serialised as the project's nodes publish and take them (``RawMessageBuilder``,
 
 Variants: ``separate`` (each node its own process, as the chain runs) and ``one-process``
 (the four nodes in one process and one executor: one DDS participant, Fast DDS's
-intraprocess delivery). Every process runs with ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``
-and the project's loopback profile (``brake_hil.app.chain.ros_environment``). After a warm-up,
+intraprocess delivery). Every process runs local-only with the project's loopback profile
+(``SYSTEM_DEFAULT`` with it: ``brake_hil.app.chain.ros_environment``). After a warm-up,
 each process's CPU (user + system, ``/proc/PID/stat``) is read over ``--seconds``, and every
 node counts what it published and received per topic; at the end the source stops and the
 subscribers are given time to receive the rest, so messages lost are counted, not guessed.

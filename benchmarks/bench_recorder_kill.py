@@ -51,6 +51,7 @@ from rclpy.node import Node  # noqa: E402
 from brake_hil.app.chain import ros_environment  # noqa: E402
 from brake_hil.io.mcap_salvage import salvage_file  # noqa: E402
 from brake_hil.nodes import common  # noqa: E402
+from brake_hil.runtime import loopback_environment  # noqa: E402
 from brake_hil.topics import AIR_PRESSURE, MASTER_CYLINDER_PRESSURE, MEASURED_OUTPUTS  # noqa: E402
 
 TOPICS = (MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS, AIR_PRESSURE)
@@ -204,6 +205,7 @@ def main() -> None:
         help="run only these settings (repeatable); default: the four of the table",
     )
     args = parser.parse_args()
+    loopback_environment(os.environ)  # this process's source on loopback, as the recorder's
     settings = SETTINGS
     if args.setting:
         pairs = [text.split(":") for text in args.setting]

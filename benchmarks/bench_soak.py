@@ -43,6 +43,7 @@ from __future__ import annotations
 import argparse
 from collections.abc import Sequence
 import json
+import math
 import os
 from pathlib import Path
 import platform
@@ -378,7 +379,10 @@ def soak(
 
 def _us(summary: dict[str, float], key: str) -> str:
     value = summary.get(key)
-    return "-" if value is None else f"{value:.0f}"
+    if value is None:
+        return "-"
+    ceiling = summary.get("ceiling_us", math.inf)
+    return f">{ceiling / 1000:.0f}ms" if value >= ceiling else f"{value:.0f}"
 
 
 def report(result: dict[str, Any]) -> None:

@@ -6,7 +6,7 @@ window, OK/WARN/ERROR thresholds.
 
 from __future__ import annotations
 
-from collections import deque
+import bisect
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 import math
@@ -28,6 +28,11 @@ DEFAULT_TOLERANCES: dict[str, float] = {
     "nrmse": 0.005,
 }
 """How far (absolute) a metric may move from its baseline before ``regress`` fails."""
+HORIZON_NS = 30_000_000_000
+"""How long (ns of stamps) a sample waits for its partner: as long as the recorder keeps."""
+UNPAIRED_REASONS = ("behind", "mismatch")
+"""Why a sample was dropped unpaired: its partner side was more than the horizon ``behind``;
+or it had passed the stamp without an equal one (``mismatch``: an offset, another clock)."""
 
 
 # --------------------------------------------------------------------------- thresholds
@@ -77,55 +82,115 @@ class PairedWindow(NamedTuple):
 class StampPairer:
     """Pairs predicted with measured samples of one channel by equal stamps.
 
-    Samples wait for their partner in insertion-ordered dicts; when more than ``max_pending``
-    wait on one side the oldest are dropped and counted as unpaired. Paired samples are kept
-    in a ring of ``capacity``. Not thread-safe: feed it from one thread.
+    Samples wait for their partner in insertion-ordered dicts for ``horizon_ns`` of their own
+    side's stamps (30 s, as long as the recorder keeps history): a side that falls behind is
+    paired late, not dropped. A sample that waited longer is dropped and counted by reason
+    (:attr:`unpaired_reasons`): ``mismatch`` when the other side had passed its stamp without
+    an equal one (stamps that never match: an offset, another clock, a sample lost on the other
+    side), ``behind`` when the other side had not reached it (no partner within the horizon).
+    ``max_pending`` caps each side (a safety bound: stamps out of order), dropped as ``behind``.
+    Memory: at most ``max_pending`` samples a side. The newest ``capacity`` pairs are kept in
+    stamp order (30 s by default: a consumer that takes them late still finds its windows).
+    Not thread-safe: feed it from one thread.
     """
 
-    capacity: int = 4000
-    max_pending: int = 2000
+    capacity: int = HORIZON_NS // 1_000_000
+    horizon_ns: int = HORIZON_NS
+    max_pending: int = 2 * HORIZON_NS // 1_000_000
     paired: int = 0
     unpaired_predicted: int = 0
     unpaired_measured: int = 0
+    unpaired_reasons: dict[str, int] = field(
+        default_factory=lambda: dict.fromkeys(UNPAIRED_REASONS, 0)
+    )
     _predicted: dict[int, float] = field(default_factory=dict, repr=False)
     _measured: dict[int, float] = field(default_factory=dict, repr=False)
-    _pairs: deque[tuple[int, float, float]] = field(init=False, repr=False)
-
-    def __post_init__(self) -> None:
-        self._pairs = deque(maxlen=self.capacity)
+    _newest: list[int | None] = field(default_factory=lambda: [None, None], repr=False)
+    _pairs: list[tuple[int, float, float]] = field(default_factory=list, repr=False)
 
     def add_predicted(self, stamp_ns: int, value: float) -> None:
         """One predicted sample."""
         partner = self._measured.pop(stamp_ns, None)
         if partner is None:
-            self._predicted[stamp_ns] = value
-            if len(self._predicted) > self.max_pending:
-                del self._predicted[next(iter(self._predicted))]
-                self.unpaired_predicted += 1
+            self._wait(0, stamp_ns, value)
         else:
-            self._pairs.append((stamp_ns, value, partner))
-            self.paired += 1
+            self._pair(stamp_ns, value, partner)
+            self._see(0, stamp_ns)
 
     def add_measured(self, stamp_ns: int, value: float) -> None:
         """One measured sample."""
         partner = self._predicted.pop(stamp_ns, None)
         if partner is None:
-            self._measured[stamp_ns] = value
-            if len(self._measured) > self.max_pending:
-                del self._measured[next(iter(self._measured))]
-                self.unpaired_measured += 1
+            self._wait(1, stamp_ns, value)
         else:
-            self._pairs.append((stamp_ns, partner, value))
-            self.paired += 1
+            self._pair(stamp_ns, partner, value)
+            self._see(1, stamp_ns)
+
+    def _pair(self, stamp_ns: int, predicted: float, measured: float) -> None:
+        """Keep a pair in stamp order (pairs come mostly in order: an append), newest kept."""
+        pairs = self._pairs
+        entry = (stamp_ns, predicted, measured)
+        if not pairs or stamp_ns >= pairs[-1][0]:
+            pairs.append(entry)
+        else:
+            bisect.insort(pairs, entry)
+        self.paired += 1
+        if len(pairs) > self.capacity + 1000:  # trimmed in chunks: amortised O(1)
+            del pairs[: len(pairs) - self.capacity]
+
+    def _see(self, side: int, stamp_ns: int) -> None:
+        newest = self._newest[side]
+        if newest is None or stamp_ns > newest:
+            self._newest[side] = stamp_ns
+
+    def _wait(self, side: int, stamp_ns: int, value: float) -> None:
+        """Hold a sample of ``side`` (0 predicted, 1 measured); drop what waited too long."""
+        self._see(side, stamp_ns)
+        pending = self._measured if side else self._predicted
+        pending[stamp_ns] = value
+        oldest_kept = stamp_ns - self.horizon_ns
+        while pending:
+            first = next(iter(pending))
+            if first >= oldest_kept and len(pending) <= self.max_pending:
+                break
+            del pending[first]
+            self._drop(side, first)
+
+    def _drop(self, side: int, stamp_ns: int) -> None:
+        if side:
+            self.unpaired_measured += 1
+        else:
+            self.unpaired_predicted += 1
+        self.unpaired_reasons[self._reason(side, stamp_ns)] += 1
+
+    def _reason(self, side: int, stamp_ns: int) -> str:
+        other = self._newest[1 - side]
+        return "mismatch" if other is not None and other >= stamp_ns else "behind"
 
     @property
     def pending(self) -> tuple[int, int]:
         """Samples waiting for a partner: ``(predicted, measured)``."""
         return len(self._predicted), len(self._measured)
 
-    def window(self) -> PairedWindow:
-        """The paired samples held, sorted by stamp."""
-        pairs = sorted(self._pairs)
+    def unpaired_now(self) -> dict[str, int]:
+        """Unpaired samples by reason, counting those still waiting as if the run ended now.
+
+        Waiting samples whose stamp the other side has passed are ``mismatch``; the others are
+        ``end`` (the run ended before their partner came).
+        """
+        counts = dict(self.unpaired_reasons)
+        counts["end"] = 0
+        for side, pending in enumerate((self._predicted, self._measured)):
+            for stamp in pending:
+                reason = self._reason(side, stamp)
+                counts["end" if reason == "behind" else reason] += 1
+        return counts
+
+    def window(self, since_ns: int | None = None) -> PairedWindow:
+        """The paired samples held (those stamped ``since_ns`` or later), sorted by stamp."""
+        pairs = self._pairs
+        if since_ns is not None:
+            pairs = pairs[bisect.bisect_left(pairs, (since_ns,)) :]
         stamps = np.fromiter((p[0] for p in pairs), dtype=np.int64, count=len(pairs))
         predicted = np.fromiter((p[1] for p in pairs), dtype=np.float64, count=len(pairs))
         measured = np.fromiter((p[2] for p in pairs), dtype=np.float64, count=len(pairs))
@@ -274,3 +339,53 @@ def score_segments(
             parts.append(signals.cycle_metrics(pred[part], meas[part], time_s[part], period_s))
         result[channel] = weighted_metrics(parts)
     return result
+
+
+def expected_cycles(
+    stamps_ns: IntArray,
+    measured: Mapping[str, FloatArray],
+    period_s: float = signals.EXCITATION_PERIOD_S,
+    window_cycles: int = 10,
+    sample_period_ns: int = 1_000_000,
+) -> dict[str, int]:
+    """Steady cycles the comparator scores per channel on a recording when nothing is lost.
+
+    The comparator's grid and scoring (:func:`evaluate_cycle`) on the recording's measured
+    samples paired with themselves: what a live run that kept up pairs. The first channel
+    (``p_b``) places the grid at its peak once it is first steady, as the node does.
+    """
+    period_ns = round(period_s * 1e9)
+    span_ns = (window_cycles + 2) * period_ns
+    counts = dict.fromkeys(measured, 0)
+    if stamps_ns.size < 2:
+        return counts
+    cycle_end = int(stamps_ns[0]) + (window_cycles + 1) * period_ns
+    aligned = False
+    first = next(iter(measured))
+    while cycle_end + period_ns <= int(stamps_ns[-1]):
+        low, high = np.searchsorted(stamps_ns, (cycle_end - span_ns, cycle_end + 2 * period_ns))
+        stamps = stamps_ns[low:high]
+        steady_first = False
+        for channel, values in measured.items():
+            part = values[low:high]
+            try:
+                result = evaluate_cycle(
+                    PairedWindow(stamps, part, part),
+                    cycle_end,
+                    period_s,
+                    window_cycles,
+                    sample_period_ns,
+                )
+            except ValueError:
+                continue
+            counts[channel] += result.steady and result.cycle is not None
+            steady_first = steady_first or (channel == first and result.steady)
+        cycle_end += period_ns
+        if steady_first and not aligned:
+            keep = slice(max(0, high - span_ns // sample_period_ns), high)
+            part = measured[first][keep]
+            peak = peak_stamp_ns(PairedWindow(stamps_ns[keep], part, part), period_s)
+            half = period_ns // 2
+            cycle_end = peak - ((peak - (cycle_end - half)) // period_ns) * period_ns
+            aligned = True
+    return counts

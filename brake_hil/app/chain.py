@@ -2,7 +2,8 @@
 
 What ``ros2 launch`` would do, without a ROS install: each node is started as
 ``python -m brake_hil.nodes.<name> --ros-args --params-file <file>`` with
-``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` and one ``ROS_DOMAIN_ID`` for the run, in its own
+DDS local-only on loopback (:func:`.chain_environment.ros_environment`) and one
+``ROS_DOMAIN_ID`` for the run, in its own
 session (a Ctrl-C reaches the launcher only, which then stops the nodes in order). The
 source replays the recording once and exits (``exit_at_end``) after waiting for the model,
 comparator and recorder to subscribe; the launcher then gives the model and comparator a

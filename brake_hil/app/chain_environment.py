@@ -34,11 +34,14 @@ DEFAULT_MODEL = PROJECT / "config" / "rig_default.yaml"
 def ros_environment(domain_id: int | None = None) -> dict[str, str]:
     """The environment of a node process: DDS on loopback, the run's domain.
 
-    Local-only: the project's loopback profile unless the user set a Fast DDS profile of
-    their own (:func:`brake_hil.runtime.loopback_environment`).
+    Local-only: the project's loopback profile with ``SYSTEM_DEFAULT`` (every socket on
+    127.0.0.1), or ``LOCALHOST`` where the profile is not loaded (a Fast DDS profile of the
+    user's own, ``BRAKE_HIL_DDS_PROFILE=off``, another middleware):
+    :func:`brake_hil.runtime.loopback_environment`.
     """
     env = dict(os.environ)
-    if env.get("BRAKE_HIL_DDS_PROFILE") != "loopback":
+    inherited = env.get("BRAKE_HIL_DDS_PROFILE") == "loopback"  # profile + SYSTEM_DEFAULT
+    if not (inherited and env.get("ROS_AUTOMATIC_DISCOVERY_RANGE") == "SYSTEM_DEFAULT"):
         env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     loopback_environment(env)
     env["ROS_DOMAIN_ID"] = str(choose_domain_id() if domain_id is None else domain_id)

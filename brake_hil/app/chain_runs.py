@@ -17,6 +17,8 @@ from typing import Any
 
 import numpy as np
 
+from brake_hil.analysis.recording import Recording
+from brake_hil.analysis.stamp_scoring import expected_cycles
 from brake_hil.app.chain_environment import (
     DEFAULT_MODEL,
     PROJECT,
@@ -71,6 +73,8 @@ class _Run:
     bag_name: str | None
     expected: int
     missing: tuple[str, ...] = ()
+    expected_cycles: dict[str, int] | None = None  # steady cycles the recording holds
+    schedule_s: float | None = None  # the replay's length at its rate (s)
     nodes: list[NodeProcess] = field(default_factory=list)
     exit_codes: dict[str, int] = field(default_factory=dict)
     cpu_s: dict[str, float] = field(default_factory=dict)
@@ -144,6 +148,8 @@ class _Run:
             logs=self.logs,
             source=read_json(out_dir / "pressure_source.json"),
             expected=self.expected,
+            expected_cycles=self.expected_cycles,
+            schedule_s=self.schedule_s,
         )
 
 
@@ -214,6 +220,8 @@ def run_chain(
         run.missing = ("recorder",)
         run.say("recorder node not available: running without recording")
     length_s = float(source.time[-1])
+    run.expected_cycles = _expected_cycles(source)
+    run.schedule_s = length_s / rate
     run.say(
         f"chain on {recording} ({length_s:.1f} s at rate {rate:g}), model {model_file}, "
         f"ROS_DOMAIN_ID {run.env['ROS_DOMAIN_ID']}"
@@ -280,6 +288,13 @@ def _wait_for_exit(run: _Run, node: NodeProcess, timeout_s: float) -> None:
         node.process.wait(timeout_s)
     except subprocess.TimeoutExpired:
         run.say(f"{node.name} did not finish in time: stopping it")
+
+
+def _expected_cycles(recording: Recording) -> dict[str, int]:
+    """Steady cycles per channel the comparator scores on ``recording`` when it keeps up."""
+    stamps = np.round(recording.time * 1e9).astype(np.int64)
+    measured = {c: v for c, v in recording.measured().items() if v is not None}
+    return expected_cycles(stamps, measured)
 
 
 def _source_waits(subscribers: int) -> list[str]:

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 from brake_hil.analysis.comparison import Comparison, compare
 from brake_hil.app.naming import naming
-from brake_hil.app.output import check_outputs, write_json
+from brake_hil.app.output import check_outputs, removed_if_refused, write_json
 from brake_hil.io.opened import open_recording
 from brake_hil.physics.rig import Rig
 
@@ -29,34 +30,44 @@ class CompareResult:
 
 def run_compare(
     recording_path: Path,
-    rig_path: Path,
+    rig_path: Path | None = None,
     json_path: Path | None = None,
     plot_path: Path | None = None,
+    ready: Callable[[], None] | None = None,
 ) -> CompareResult:
     """Run the rig's LTI model on the recording's ``p_i`` and score it on each steady segment.
 
     Args:
         recording_path: a recording with ``p_i`` and the three measured outputs.
-        rig_path: the rig YAML.
+        rig_path: the rig YAML (default: ``RECORDING.rig.yaml`` beside the recording).
         json_path: write the comparison here as JSON (``None``: nowhere).
         plot_path: write a PNG of measured against predicted here (``None``: no plot).
+        ready: called once the inputs are opened and the outputs checked, before the work
+            (the command checks its database there).
+
+    The inputs are opened and checked before any output folder is made; a refusal after
+    that removes the folders it made (nothing is left of a refused command).
 
     Returns:
         The comparison.
 
     Raises:
-        BrakeHilError: a bad rig file or recording, or no steady pulsing (the message names
-            the file).
+        BrakeHilError: no such recording, a bad rig file or recording, or no steady pulsing
+            (the message names the file).
     """
-    check_outputs(json_path, plot_path)
-    opened = open_recording(recording_path, rig_path)
-    recording, rig = opened.recording, opened.rig
-    with naming(recording_path):
-        comparison = compare(recording, rig)
-    document = {"recording": str(recording_path), "rig": str(rig_path), **comparison.as_dict()}
-    if plot_path is not None:
-        from brake_hil.report.plots import plot_comparison
+    opened = open_recording(recording_path, rig_path)  # the inputs first: a refusal writes nothing
+    recording, rig, rig_path = opened.recording, opened.rig, opened.rig_path
+    parents = [path.parent for path in (json_path, plot_path) if path is not None]
+    with removed_if_refused(*parents):
+        check_outputs(json_path, plot_path)
+        if ready is not None:
+            ready()
+        with naming(recording_path):
+            comparison = compare(recording, rig)
+        document = {"recording": str(recording_path), "rig": str(rig_path), **comparison.as_dict()}
+        if plot_path is not None:
+            from brake_hil.report.plots import plot_comparison
 
-        plot_comparison(comparison, plot_path, f"{recording_path.name}: {rig.name}")
-    write_json(json_path, document)
+            plot_comparison(comparison, plot_path, f"{recording_path.name}: {rig.name}")
+        write_json(json_path, document)
     return CompareResult(recording_path, rig_path, rig, comparison, document, json_path, plot_path)

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 from brake_hil.app.naming import naming
-from brake_hil.app.output import check_outputs, write_json
+from brake_hil.app.output import check_outputs, removed_if_refused, write_json
 from brake_hil.diagnosis.candidates import CANDIDATES
 from brake_hil.diagnosis.diagnose import PAIR_SHORTLIST, Diagnosis, Progress, diagnose
 from brake_hil.files import output_file
@@ -32,7 +33,11 @@ class DiagnoseResult:
 
 
 def run_diagnose(
-    recording_path: Path, rig_path: Path, out: Path, progress: Progress | None = None
+    recording_path: Path,
+    rig_path: Path,
+    out: Path,
+    progress: Progress | None = None,
+    ready: Callable[[], None] | None = None,
 ) -> DiagnoseResult:
     """Diagnose the recording against the rig file; write its JSON, model and report.
 
@@ -41,20 +46,29 @@ def run_diagnose(
         rig_path: the nominal rig YAML (what the test engineer believes).
         out: folder for ``diagnosis.json``, ``improved_model.json`` and ``report.html``.
         progress: called with a message at each step (about :data:`DIAGNOSIS_STEPS`).
+        ready: called once the inputs are opened and the output folder checked, before the
+            work (the command checks its database there).
+
+    The inputs are opened and checked before the output folder is made; a refusal after
+    that removes the folders it made (a refused command leaves no empty folder).
 
     Returns:
         The diagnosis and the paths of the files written.
 
     Raises:
-        BrakeHilError: a bad rig file or recording (the message names the file).
+        BrakeHilError: no such recording, a bad rig file or recording (the message names
+            the file).
     """
     from brake_hil.report.diagnosis_report import REPORT_FILES, write_report
 
-    check_outputs(folder=out, names=(*DIAGNOSE_FILES, *REPORT_FILES))
-    opened = open_recording(recording_path, rig_path)
+    opened = open_recording(recording_path, rig_path)  # the inputs first: a refusal writes nothing
     recording, rig = opened.recording, opened.rig
-    with naming(recording_path):
-        diagnosis = diagnose(recording, rig, progress)
+    with removed_if_refused(out):
+        check_outputs(folder=out, names=(*DIAGNOSE_FILES, *REPORT_FILES))
+        if ready is not None:
+            ready()
+        with naming(recording_path):
+            diagnosis = diagnose(recording, rig, progress)
     json_path = output_file(out, "diagnosis.json")
     write_json(json_path, diagnosis.as_dict())
     improved = diagnosis.improved_model(rig_path).save(output_file(out, "improved_model.json"))

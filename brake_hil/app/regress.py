@@ -14,26 +14,36 @@ derives the model at each segment's own mean pressure, the live model at one).
   node's code path, faster than real time), scored over the recording's steady segments.
 * :func:`compare_with_baseline`: metric by metric against a stored baseline, with absolute
   tolerances; :func:`load_baseline` / :func:`baseline_document` read and write its JSON.
+* :func:`plan_replays` says which recordings the paths name and which model file each is
+  replayed through: ``--model`` for all, else the baseline's model file when it names one,
+  else each recording's own rig file (``RECORDING.rig.yaml`` beside it, as ``diagnose`` finds
+  it). A path that holds no recording, or a recording with no rig file beside it, is
+  skipped with its reason; a path that does not exist is refused.
 * :func:`run_regression` is the command: bags replayed over
   :func:`~brake_hil.app.parallel.parallel_map`, the baseline compared or rewritten; it
   prints nothing and returns a :class:`Regression`.
+* :func:`far_off`: a baseline that is itself far from the recording (a ptp ratio more than
+  :data:`FAR_OFF_PTP_PCT` from 100 %, the comparator's ERROR level) is flagged: a regression
+  that holds still against it only says the wrong answer has not changed.
 
-Baseline JSON: ``{"model_file": path relative to the baseline's folder, "tolerances":
-{metric: absolute tolerance}, "bags": {name: {"metrics": {channel: {metric: value}}, ...}}}``,
-a bag named by its path relative to the baseline's folder.
+Baseline JSON: ``{"model_file": path relative to the baseline's folder (only when one model
+file was given for all), "tolerances": {metric: absolute tolerance}, "bags": {name:
+{"model_file": the model file it was replayed through, relative to the baseline's folder,
+"metrics": {channel: {metric: value}}, ...}}}``, a bag named by its path relative to the
+baseline's folder.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import partial
 import json
 import math
 import os
 from pathlib import Path
 import time
-from typing import Any, NamedTuple
+from typing import Any, Final, NamedTuple
 
 import numpy as np
 
@@ -42,14 +52,28 @@ from brake_hil.analysis.recording import Recording
 from brake_hil.analysis.stamp_scoring import (
     DEFAULT_TOLERANCES,
     METRIC_KEYS,
+    Thresholds,
     score_segments,
 )
 from brake_hil.app.parallel import ONE_PER_CORE, Outcome, Workers, parallel_map, values
-from brake_hil.errors import BaselineError, NoSteadyPulsingError, RecordingError, SignalError
+from brake_hil.app.recordings import find_recordings, rig_beside
+from brake_hil.errors import (
+    BaselineError,
+    BrakeHilError,
+    NoSteadyPulsingError,
+    RecordingError,
+    SignalError,
+)
 from brake_hil.io.recording_reader import read_recording
 from brake_hil.live.model_file import load_model
 from brake_hil.physics.lti_model import SAMPLE_TIME
 from brake_hil.topics import OUTPUT_CHANNELS
+
+FAR_OFF_PTP_PCT: Final = Thresholds().ptp_ratio_error_pct
+"""A baseline whose ptp ratio of a channel is further than this from 100 % (percentage points)
+is itself far off: the comparator's ERROR level, where the live comparator calls the model
+wrong. A rig file's ``tolerances`` bound its values, not the ptp ratio, so the comparator's
+level is the one bound on the ratio itself."""
 
 # --------------------------------------------------------------------------- replay
 
@@ -150,6 +174,24 @@ def replay_file(
     return replay_recording(reader(path), model_file, mean_pressure)
 
 
+def replay_job(job: tuple[Path, Path], reader: Callable[[Path], Recording]) -> ReplayResult:
+    """:func:`replay_file` of a ``(recording, model file)`` pair (for process pools)."""
+    return replay_file(job[0], job[1], reader)
+
+
+def far_off(metrics: Mapping[str, Mapping[str, float]]) -> list[str]:
+    """``"F_k ptp 180.8 %"`` for each channel whose ptp ratio is far from 100 %.
+
+    Far: more than :data:`FAR_OFF_PTP_PCT` away, or not a number.
+    """
+    found = []
+    for channel in OUTPUT_CHANNELS:
+        ratio = float(metrics.get(channel, {}).get("ptp_ratio_pct", math.nan))
+        if not math.isfinite(ratio) or abs(ratio - 100.0) > FAR_OFF_PTP_PCT:
+            found.append(f"{channel} ptp {ratio:.1f} %")
+    return found
+
+
 # --------------------------------------------------------------------------- baseline
 
 
@@ -177,7 +219,10 @@ class MetricCheck(NamedTuple):
 
 
 def bag_key(path: Path | str, baseline_path: Path) -> str:
-    """Name of a recording in a baseline: its path relative to the baseline's folder."""
+    """Name of a recording (or model file) in a baseline.
+
+    Its path relative to the baseline's folder, or its absolute path when outside it.
+    """
     path = Path(path).resolve()
     try:
         return path.relative_to(baseline_path.resolve().parent).as_posix()
@@ -248,7 +293,8 @@ def baseline_document(
         bags[key] = result.as_dict()
     document: dict[str, Any] = {
         "about": "brake-hil regress baseline: comparator metrics of each recording replayed "
-        "through the model file's model; tolerances are absolute",
+        "through its model file (its own rig file beside it, unless one model_file is given "
+        "for all); paths relative to this file's folder; tolerances are absolute",
         "tolerances": dict(previous.get("tolerances", DEFAULT_TOLERANCES)),
         "bags": dict(sorted(bags.items())),
     }
@@ -290,18 +336,72 @@ def replay_all(
     return values(parallel_map(replay, bags, workers, progress))
 
 
+class Plan(NamedTuple):
+    """Which recordings are replayed through which model file, and what was skipped."""
+
+    jobs: list[tuple[Path, Path]]  # (recording, model file)
+    sources: dict[Path, str]  # recording -> where its model file came from
+    refused: dict[str, str]  # path -> why it is not replayed (one line naming it)
+
+
+def _model_for(recording: Path, model_file: Path | None, stored: Path | None) -> tuple[Path, str]:
+    """The model file a recording is replayed through, and where it came from."""
+    if model_file is not None:
+        return model_file, "--model"
+    if stored is not None:
+        return stored, "the baseline's model file"
+    return rig_beside(recording, "--model"), "beside the recording"
+
+
+def plan_replays(
+    paths: Sequence[Path], model_file: Path | None = None, stored: Path | None = None
+) -> Plan:
+    """The recordings ``paths`` name, each with its model file.
+
+    A folder of recordings gives each recording in it. A path that holds no recording (a
+    folder of rig files, a file that is no recording), or a recording without a rig file
+    beside it when neither ``model_file`` nor ``stored`` is given, is refused with its reason.
+
+    Raises:
+        RecordingError: a path that does not exist ("no such recording").
+    """
+    jobs: list[tuple[Path, Path]] = []
+    sources: dict[Path, str] = {}
+    refused: dict[str, str] = {}
+    for path in paths:
+        if not Path(path).exists():
+            raise RecordingError(f"{path}: no such recording")
+        try:
+            found = find_recordings([path])
+        except BrakeHilError as err:
+            refused[str(path)] = str(err)
+            continue
+        for recording in found:
+            try:
+                model, source = _model_for(recording, model_file, stored)
+            except BrakeHilError as err:
+                refused[str(recording)] = str(err)
+                continue
+            jobs.append((recording, model))
+            sources[recording] = source
+    return Plan(jobs, sources, refused)
+
+
 @dataclass(frozen=True)
 class Regression:
     """What ``brake-hil regress`` found: each bag's replay and its metrics against the baseline."""
 
     baseline_path: Path
-    model_file: Path
+    model_file: Path | None  # the one model file of every bag (--model or the baseline's)
     results: dict[str, ReplayResult]  # bag key (see :func:`bag_key`) -> replay
     skipped: dict[str, str]  # bag key -> why: recordings without steady pulsing, not scored
     lost: tuple[str, ...]  # skipped bags the baseline holds: they no longer score (moved)
     checks: tuple[MetricCheck, ...]  # every metric of every bag against the baseline
     wall_s: float  # wall time of all replays (s)
     updated: bool  # the baseline was (re)written with these results
+    refused: dict[str, str] = field(default_factory=dict)  # path -> why it was not replayed
+    sources: dict[str, str] = field(default_factory=dict)  # bag key -> where its model came from
+    far_off: dict[str, list[str]] = field(default_factory=dict)  # bag key -> far-off channels
 
     @property
     def data_s(self) -> float:
@@ -319,6 +419,65 @@ class Regression:
         return bool(self.moved or self.lost)
 
 
+def _stored_model(previous: Mapping[str, Any] | None, baseline_path: Path) -> Path | None:
+    """The baseline's one model file (``model_file`` at its top), or ``None``."""
+    stored = (previous or {}).get("model_file")
+    if stored is None:
+        return None
+    if not isinstance(stored, str):
+        raise BaselineError(f"{baseline_path}: 'model_file' must be a path")
+    return Path(os.path.normpath(baseline_path.parent / stored))
+
+
+def _write_baseline(
+    path: Path,
+    results: Mapping[str, ReplayResult],
+    previous: Mapping[str, Any] | None,
+    model_file: Path | None,
+) -> None:
+    """Write the baseline: each bag with the model file it used, relative to ``path``'s folder."""
+    document = baseline_document(results, previous)
+    for key, result in results.items():
+        document["bags"][key]["model_file"] = bag_key(result.model_file, path)
+    document.pop("model_file", None)
+    if model_file is not None:
+        document["model_file"] = bag_key(model_file, path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
+
+
+def _scored(
+    keys: Sequence[str], outcomes: Sequence[Outcome[ReplayResult]]
+) -> tuple[dict[str, ReplayResult], dict[str, str]]:
+    """The replays by bag key, and the bags skipped for want of steady pulsing (why).
+
+    Raises:
+        BrakeHilError: the first bag (in order) that failed otherwise.
+    """
+    results: dict[str, ReplayResult] = {}
+    skipped: dict[str, str] = {}
+    for key, outcome in zip(keys, outcomes):
+        if isinstance(outcome.error, NoSteadyPulsingError):
+            skipped[key] = str(outcome.error)
+        else:
+            results[key] = outcome.unwrap()
+    return results, skipped
+
+
+def _far_off_baselines(
+    results: Mapping[str, ReplayResult], held: Mapping[str, Any] | None
+) -> dict[str, list[str]]:
+    """:func:`far_off` of each baseline.
+
+    The results just written (``held`` ``None``), or the stored baseline of each bag replayed.
+    """
+    if held is None:
+        metrics = {key: result.metrics for key, result in results.items()}
+    else:
+        metrics = {key: held[key]["metrics"] for key in results if key in held}
+    return {key: found for key, value in metrics.items() if (found := far_off(value))}
+
+
 def run_regression(
     bags: Sequence[Path],
     baseline_path: Path,
@@ -327,58 +486,73 @@ def run_regression(
     workers: Workers = ONE_PER_CORE,
     progress: Callable[[Outcome[ReplayResult]], None] | None = None,
     reader: Callable[[Path], Recording] = read_recording,
+    start: Callable[[Plan], None] | None = None,
 ) -> Regression:
     """``brake-hil regress``: replay ``bags``, score, compare with (or ``update``) the baseline.
 
     Args:
-        bags: recordings to replay.
+        bags: recordings, or folders of them, to replay.
         baseline_path: the baseline JSON (written when ``update``).
-        model_file: the model file; default the baseline's.
-        update: rewrite the baseline with these results instead of only comparing.
+        model_file: one model file for every recording; default the baseline's when it names
+            one, else each recording's own rig file (``RECORDING.rig.yaml`` beside it).
+        update: rewrite the baseline with these results instead of only comparing (a new
+            file is made).
         workers: where the bags are replayed (:class:`~brake_hil.app.parallel.Workers`).
         progress: called with each bag's outcome as it finishes (in the order they finish).
         reader: reads a recording (must pickle: a module-level function).
+        start: called with the plan once the inputs are checked, before the replays.
 
-    A recording without steady 5 Hz pulsing (a ramp, a sweep) has nothing to score: it is
-    skipped (:attr:`Regression.skipped`, with the reason) and never written to the baseline;
-    one the baseline holds is :attr:`Regression.lost`, a failure.
+    A path that holds no recording, or a recording without its rig file, is
+    :attr:`Regression.refused` (one the baseline holds is lost). A recording without steady
+    5 Hz pulsing (a ramp, a sweep) has nothing to score: it is skipped
+    (:attr:`Regression.skipped`, with the reason) and never written to the baseline; one
+    the baseline holds is :attr:`Regression.lost`, a failure.
 
     Returns:
-        The replays and their checks; the command exits 0 when the baseline was written or
-        nothing moved or was lost (:attr:`Regression.failed`), else 1.
+        The replays, their checks and the far-off baselines (:func:`far_off`: of the
+        results when ``update``, else of the stored baseline).
 
     Raises:
-        BaselineError: unusable baseline, no model file, or two bags with one name.
-        BrakeHilError: a bad recording or model file (the message names it).
+        BaselineError: unusable baseline, or two bags with one name.
+        BrakeHilError: a path that does not exist, nothing left to replay, a bad recording
+            or model file (the message names it).
     """
     previous = None if update and not baseline_path.exists() else load_baseline(baseline_path)
-    if model_file is None:
-        stored = (previous or {}).get("model_file")
-        if not isinstance(stored, str):
-            raise BaselineError(f"{baseline_path}: names no model file; pass --model")
-        model_file = Path(os.path.normpath(baseline_path.parent / stored))
-    load_model(model_file)  # a bad model file fails once, here
-    keys = [bag_key(bag, baseline_path) for bag in bags]
+    stored = None if model_file is not None else _stored_model(previous, baseline_path)
+    plan = plan_replays(bags, model_file, stored)
+    if not plan.jobs:
+        reasons = "; ".join(plan.refused.values())
+        raise BaselineError(f"{baseline_path}: no recording to replay: {reasons}")
+    for model in dict.fromkeys(model for _, model in plan.jobs):
+        load_model(model)  # a bad model file fails once, here
+    keys = [bag_key(bag, baseline_path) for bag, _ in plan.jobs]
     if len(set(keys)) != len(keys):
         raise BaselineError(f"{baseline_path}: bags given twice: {sorted(keys)}")
+    if start is not None:
+        start(plan)
     started = time.perf_counter()
-    replay = partial(replay_file, model_file=model_file, reader=reader, mean_pressure=None)
-    outcomes = parallel_map(replay, bags, workers, progress)
+    outcomes = parallel_map(partial(replay_job, reader=reader), plan.jobs, workers, progress)
     wall = time.perf_counter() - started
-    results: dict[str, ReplayResult] = {}
-    skipped: dict[str, str] = {}
-    for key, outcome in zip(keys, outcomes):
-        if isinstance(outcome.error, NoSteadyPulsingError):
-            skipped[key] = str(outcome.error)
-        else:
-            results[key] = outcome.unwrap()
-    lost = tuple(key for key in skipped if key in (previous or {}).get("bags", {}))
+    results, skipped = _scored(keys, outcomes)
+    held = (previous or {}).get("bags", {})
+    refused_keys = [bag_key(path, baseline_path) for path in plan.refused]
+    lost = tuple(key for key in [*skipped, *refused_keys] if key in held)
     checks = compare_with_baseline(results, previous or {})
     if update:
-        document = baseline_document(results, previous)
-        document["model_file"] = os.path.relpath(model_file, baseline_path.parent)
-        baseline_path.parent.mkdir(parents=True, exist_ok=True)
-        baseline_path.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
+        _write_baseline(baseline_path, results, previous, model_file or stored)
+    flagged = _far_off_baselines(results, None if update else held)
+    sources = {key: plan.sources[bag] for key, (bag, _) in zip(keys, plan.jobs)}
+    one_model = model_file or stored
     return Regression(
-        baseline_path, model_file, results, skipped, lost, tuple(checks), wall, update
+        baseline_path,
+        one_model,
+        results,
+        skipped,
+        lost,
+        tuple(checks),
+        wall,
+        update,
+        plan.refused,
+        sources,
+        flagged,
     )

@@ -13,7 +13,9 @@ from collections.abc import Mapping
 import json
 from pathlib import Path
 
+from brake_hil.errors import BrakeHilError
 from brake_hil.files import check_output_file
+from brake_hil.results.backends import database_path
 from brake_hil.results.identity import identify, identify_with_model
 from brake_hil.results.store import open_store
 
@@ -23,6 +25,7 @@ __all__ = [
     "append_diagnosis",
     "append_regression",
     "check_database",
+    "database_folder",
 ]
 
 DATABASE_NAME = "results.sqlite"
@@ -39,17 +42,37 @@ def _opened(database: Path | str) -> Path | str:
     return database
 
 
+def database_folder(database: Path | str | None) -> Path | None:
+    """The folder of a database file (``None``: no database, or a server's)."""
+    if database is None:
+        return None
+    try:
+        return database_path(database).parent
+    except BrakeHilError:
+        return None
+
+
 def check_database(database: Path | str | None) -> None:
-    """Open the database (made if missing) before the work: a bad one is refused first.
+    """Open the database before the work: a bad one is refused first.
+
+    A database file that does not exist yet is not made here (only its folder, proved
+    writable): a command refused later leaves no empty database behind; the first append
+    makes it.
 
     Raises:
         BrakeHilError: a URL of another scheme, a file or server database that is not a
             results database, a server not reached, or a path that cannot be written (one
             line naming it).
     """
-    if database is not None:
-        with open_store(_opened(database)):
-            pass
+    if database is None:
+        return
+    file = database_folder(database) and database_path(database)
+    if file is not None:
+        check_output_file(file)
+        if not file.exists():
+            return
+    with open_store(_opened(database)):
+        pass
 
 
 def append_diagnosis(recording: Path, rig: Path, json_path: Path, database: Path | str) -> str:

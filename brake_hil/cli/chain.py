@@ -4,8 +4,10 @@ Parses the options, runs ``brake_hil.app.chain.run_chain`` (``--layout``: which 
 a process, ``brake_hil.nodes.container``; ``--one-process`` the four in one; or
 ``run_can_chain`` with ``--can-emulator``), prints its notices as
 they come and then the comparator's run summary, the model's timing and where the MCAP is.
-Exit status: 0; 1 when a node exited with an error, or when an input sample was lost or left
-unpredicted (one line saying how many); 2 on bad input (one line on stderr). ``--help``
+Closing lines: the run judged (``ChainResult.verdict``): samples predicted and recorded, steady
+cycles scored against those the recording holds, real time, the model loop's timing (OK, WARN,
+ERROR). Exit status: 0 when every judgement holds; 1 when one fails or a node exited with an
+error (one line on stderr per cause); 2 on bad input (one line on stderr). ``--help``
 imports neither the runs nor rclpy.
 """
 
@@ -13,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Sequence
+import math
 from pathlib import Path
 import sys
 from typing import TYPE_CHECKING
@@ -160,9 +163,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     for line in result_lines(result):
         print(line)
-    complete, line = result.sample_losses()
-    print(f"chain: {line}", file=sys.stdout if complete else sys.stderr)
-    return 1 if result.failed or not complete else 0
+    status, held, failed = result.verdict()
+    for line in held:
+        print(f"chain: {line}")
+    for line in failed:
+        print(f"chain: {line}", file=sys.stderr)
+    return status
 
 
 def result_lines(result: ChainResult) -> list[str]:
@@ -193,9 +199,9 @@ def result_lines(result: ChainResult) -> list[str]:
         period, latency = model["period_error"], model["latency"]
         lines.append(
             f"caliper_model: {counters['samples']} samples in, {counters['predictions']} "
-            f"predictions out; period error median {period['median_us']:.0f} us, p99 "
-            f"{period['p99_us']:.0f} us, max {period['max_us']:.0f} us; latency median "
-            f"{latency['median_us']:.0f} us, p99 {latency['p99_us']:.0f} us; "
+            f"predictions out; period error median {_us(period, 'median')}, p99 "
+            f"{_us(period, 'p99')}, max {_us(period, 'max')}; latency median "
+            f"{_us(latency, 'median')}, p99 {_us(latency, 'p99')}, max {_us(latency, 'max')}; "
             f"{counters['overruns']} overruns"
         )
     if result.cpu_s:
@@ -223,3 +229,10 @@ def result_lines(result: ChainResult) -> list[str]:
     elif "recorder" in result.missing:
         lines.append("no MCAP: the recorder node is not available")
     return lines
+
+
+def _us(summary: dict[str, float], name: str) -> str:
+    """One quantile of a timing summary's JSON (``median``, ``p99``, ``max``) for people."""
+    from brake_hil.runtime.timing import format_us
+
+    return format_us(summary[f"{name}_us"], summary.get("ceiling_us", math.inf))

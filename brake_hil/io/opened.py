@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Final
 
 from brake_hil.analysis.recording import Recording
-from brake_hil.io.recording_paths import rig_beside
+from brake_hil.io.recording_paths import existing_recording, rig_beside
 from brake_hil.io.recording_reader import read_recording
 from brake_hil.physics.rig import Rig, load_rig
 from brake_hil.topics import MASTER_CYLINDER_PRESSURE, MEASURED_OUTPUTS, TopicSpec
@@ -50,12 +50,13 @@ def open_recording(
         The recording and its rig.
 
     Raises:
+        RecordingError: no such recording (nothing at ``path``).
         BrakeHilError: no rig file beside the recording (when ``rig_path`` is ``None``).
         RigError: a bad rig file (the message names it).
         RecordingError: a bad recording (the message names it; see
             :func:`~brake_hil.io.recording_reader.read_recording`).
     """
-    path = Path(path)
+    path = existing_recording(Path(path))
     rig_path = rig_path if rig_path is not None else rig_beside(path)
     rig = load_rig(rig_path)
     return OpenedRecording(read_recording(path, required=required), rig_path, rig)

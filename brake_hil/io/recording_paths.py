@@ -5,22 +5,41 @@ Light on purpose (no numpy, no rosbags): ``brake-hil --help`` imports it.
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import Final
 
-from brake_hil.errors import BrakeHilError
+from brake_hil.errors import BrakeHilError, RecordingError
 
-__all__ = ["RECORDING_SUFFIXES", "recording_name", "rig_beside"]
+__all__ = ["RECORDING_SUFFIXES", "existing_recording", "recording_name", "rig_beside"]
 
 RECORDING_SUFFIXES: Final = (".mcap", ".db3")
 """Suffixes of the files a rosbag2 recording is stored in."""
 
 
-def rig_beside(recording: Path) -> Path:
-    """``RECORDING.rig.yaml`` beside a recording (a bag folder or a bare ``.mcap``/``.db3``).
+def existing_recording(recording: Path) -> Path:
+    """``recording``, refused when nothing is there.
+
+    A typo is named as such, before the rig file beside it is looked for and before any
+    output is made.
 
     Raises:
-        BrakeHilError: no such file (the message says to pass ``--rig``).
+        RecordingError: "no such recording", naming the path.
+    """
+    if not os.path.lexists(recording):
+        raise RecordingError(f"{recording}: no such recording")
+    return recording
+
+
+def rig_beside(recording: Path, option: str = "--rig") -> Path:
+    """``RECORDING.rig.yaml`` beside a recording (a bag folder or a bare ``.mcap``/``.db3``).
+
+    Args:
+        recording: the recording's path.
+        option: the option the message tells the user to pass instead.
+
+    Raises:
+        BrakeHilError: no rig file beside it (the message says to pass ``option``).
     """
     base = Path(str(recording).rstrip("/"))
     candidates = [base.parent / f"{base.name}.rig.yaml"]
@@ -29,7 +48,7 @@ def rig_beside(recording: Path) -> Path:
     for path in candidates:
         if path.is_file():
             return path
-    raise BrakeHilError(f"{recording}: no rig file beside it ({candidates[0]}); pass --rig")
+    raise BrakeHilError(f"{recording}: no rig file beside it ({candidates[0]}); pass {option}")
 
 
 def recording_name(recording: Path) -> str:

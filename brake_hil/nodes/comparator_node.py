@@ -33,6 +33,9 @@ from brake_hil.nodes.settings import ComparatorSettings
 from brake_hil.runtime import DeadlineLoop, Tick
 from brake_hil.topics import MEASURED_OUTPUTS, OUTPUT_CHANNELS, PREDICTED_OUTPUTS
 
+CHANNEL_LAG_NS = 10_000_000_000
+"""A channel whose pairs lag the others' by more than this (ns) no longer holds their scoring
+back (pairs are kept 30 s)."""
 NO_MATCH_S = 3.0
 """ERROR once both sides of a channel arrive but nothing has paired for this long (s)."""
 
@@ -101,7 +104,9 @@ class ComparatorNode(common.LoopNode):
         self._sample_period_ns = round(sample_period * 1e9)
         span = round((self._window_cycles + 2) * self.period_s / sample_period)
         self.pairers = {
-            channel: StampPairer(capacity=span + 500, max_pending=max(2000, span))
+            # unpaired samples wait 30 s of stamps, pairs are kept 30 s: a model that falls
+            # behind, or a comparator that takes seconds of samples at once, loses no cycle
+            channel: StampPairer(capacity=max(span, 30_000))
             for channel in OUTPUT_CHANNELS
         }
         self.cycles: dict[str, list[dict[str, float]]] = {c: [] for c in OUTPUT_CHANNELS}
@@ -109,6 +114,7 @@ class ComparatorNode(common.LoopNode):
         self._no_match: dict[str, float | None] = dict.fromkeys(OUTPUT_CHANNELS)
         self.no_match_reports = 0  # evaluations at which a channel had no match
         self._period_ns = round(self.period_s * 1e9)
+        self._span_ns = (self._window_cycles + 2) * self._period_ns  # a window and its guards
         self._next_cycle_end: int | None = None  # stamp (ns) ending the next cycle to score
         self._aligned = False  # cycles start at a peak of p_b (after the first steady window)
         self.evaluations = 0  # cycles evaluated
@@ -150,9 +156,13 @@ class ComparatorNode(common.LoopNode):
                     continue
                 add(stamp, value)
 
-    def _evaluate(self) -> None:
-        """Score every cycle whose window (and guard period) the paired samples now cover."""
-        windows = {channel: pairer.window() for channel, pairer in self.pairers.items()}
+    def _evaluate(self, final: bool = False) -> None:
+        """Score every cycle whose window (and guard period) the paired samples now cover.
+
+        ``final``: the run is over, score what any channel covers.
+        """
+        since = None if self._next_cycle_end is None else self._next_cycle_end - self._span_ns
+        windows = {channel: pairer.window(since) for channel, pairer in self.pairers.items()}
         now = time.monotonic_ns()
         self._no_match = {
             channel: self._watches[channel].update(pairer, now)
@@ -168,7 +178,7 @@ class ComparatorNode(common.LoopNode):
             first = min(int(w.stamps_ns[0]) for w in windows.values() if w.stamps_ns.size)
             self._next_cycle_end = first + (self._window_cycles + 1) * self._period_ns
         published = False
-        while self._next_cycle_end + self._period_ns <= max(newest):
+        while self._next_cycle_end + self._period_ns <= self._covered_until(newest, final):
             statuses, steady = self._statuses(windows, self._next_cycle_end)
             self._publish(statuses)
             self._next_cycle_end += self._period_ns
@@ -177,6 +187,17 @@ class ComparatorNode(common.LoopNode):
                 self._align(windows[OUTPUT_CHANNELS[0]])
         if not published and (self.evaluations == 0 or no_match):
             self._publish(self._statuses(windows, None)[0])
+
+    def _covered_until(self, newest: list[int], final: bool) -> int:
+        """The newest stamp (ns) every channel's pairs reach: a cycle is scored once all have it.
+
+        Channels pair at their own pace on a busy machine (a channel scored before its pairs
+        arrive would miss that cycle for good); a channel more than ``CHANNEL_LAG_NS`` behind
+        the others (one that stopped pairing) no longer holds them back, nor any at the end.
+        """
+        if final or len(newest) < len(self.pairers) or max(newest) - min(newest) > CHANNEL_LAG_NS:
+            return max(newest)
+        return min(newest)
 
     def _align(self, window: PairedWindow) -> None:
         """Once: move the cycle grid so cycles start at a peak of the measured bore pressure.
@@ -257,6 +278,7 @@ class ComparatorNode(common.LoopNode):
             ("paired", pairer.paired),
             ("unpaired_predicted", pairer.unpaired_predicted),
             ("unpaired_measured", pairer.unpaired_measured),
+            *((f"unpaired_{why}", n) for why, n in pairer.unpaired_reasons.items()),
             ("pending_predicted", pending_predicted),
             ("pending_measured", pending_measured),
             ("cycle_end_stamp_ns", -1 if cycle_end is None else cycle_end),
@@ -299,7 +321,9 @@ class ComparatorNode(common.LoopNode):
                 entry["level"] = common.LEVEL_NAMES[self.thresholds.level(entry)]
             pairer = self.pairers[channel]
             entry["paired"] = pairer.paired
-            entry["unpaired"] = pairer.unpaired_predicted + pairer.unpaired_measured
+            reasons = pairer.unpaired_now()  # those still waiting count as unpaired now
+            entry["unpaired"] = sum(reasons.values())
+            entry["unpaired_reasons"] = reasons
             channels[channel] = entry
         return {"window_cycles": self._window_cycles, "metrics": channels}
 
@@ -308,7 +332,7 @@ class ComparatorNode(common.LoopNode):
         self._loop.stop()
         if self.context.ok() and self._loop.error is None:
             self._take()
-            self._evaluate()
+            self._evaluate(final=True)
         summary = self.summary()
         for channel, entry in summary["metrics"].items():
             if entry["cycles"]:

@@ -41,7 +41,8 @@ def setup_environment() -> None:
     """DDS on loopback only, unless ``ROS_AUTOMATIC_DISCOVERY_RANGE`` says otherwise.
 
     Local-only (``LOCALHOST``, the default) with no Fast DDS profile of the user's: the
-    project's loopback profile (:func:`brake_hil.runtime.loopback_environment`).
+    project's loopback profile, under ``SYSTEM_DEFAULT`` so that it alone is in force
+    (:func:`brake_hil.runtime.loopback_environment`).
     """
     loopback_environment(os.environ)
 

@@ -2,9 +2,10 @@
 
 What the node does, its topics and parameters: :mod:`brake_hil.nodes.pressure_source`, the
 entry point (``python -m brake_hil.nodes.pressure_source``), which answers ``--help`` without
-importing this. The replay (:class:`~brake_hil.io.replay.Replay`) and the CAN acquisition
-(:class:`~brake_hil.io.can_acquisition.CanAcquisition`) are ROS-free; this node gives them
-publishers, a worker thread, a wait for subscribers and diagnostics.
+importing this. The replay (:class:`~brake_hil.io.replay.Replay`), the CAN acquisition
+(:class:`~brake_hil.io.can_acquisition.CanAcquisition`) and the CAN log replay
+(:class:`~brake_hil.io.can_log.CanLogReplay`) are ROS-free; this node gives them publishers, a
+worker thread, a wait for subscribers and diagnostics.
 """
 
 from __future__ import annotations
@@ -20,12 +21,14 @@ from rclpy.node import Node
 
 from brake_hil.errors import BrakeHilError
 from brake_hil.io.can_acquisition import CanAcquisition
+from brake_hil.io.can_log import CanLogReplay
 from brake_hil.io.replay import Replay
 from brake_hil.nodes import common
 from brake_hil.nodes.pressure_source import NAME
 from brake_hil.nodes.settings import PressureSourceSettings
 from brake_hil.runtime import (
     LoopStatistics,
+    StampMode,
     set_process_realtime_priority,
     set_realtime_priority,
     set_timer_slack,
@@ -60,19 +63,24 @@ class PressureSourceNode(Node):
         self._builders: dict[TopicSpec, common.RawMessageBuilder] = {}
         self._replay: Replay | None = None
         self._acquisition: CanAcquisition | None = None
+        self._can_log: CanLogReplay | None = None
         # Paired nodes (one container): ticked after each replayed sample, told at its end.
         self._followers: list[Callable[[int, int], None]] = []
         self._on_replay_end: list[Callable[[], None]] = []
         self._pair_lock = threading.Lock()
         self._replay_over = False
+        self._realtime = False  # the worker obtained SCHED_FIFO
         if self.mode == "replay":
             self._prepare_replay()
             target: Callable[[], None] = self._play
         elif self.mode == "can":
             self._prepare_can()
             target = self._acquire
+        elif self.mode == "can_log":
+            self._prepare_can_log()
+            target = self._play_can_log
         else:
-            raise BrakeHilError(f"mode must be replay or can, got {self.mode!r}")
+            raise BrakeHilError(f"mode must be replay, can or can_log, got {self.mode!r}")
         self.statistics = self._replay.statistics if self._replay else LoopStatistics()
         self.create_timer(settings.diagnostics_period, self._report)
         if settings.realtime_priority > 0 and own_process:
@@ -118,8 +126,8 @@ class PressureSourceNode(Node):
     def _start_worker(self) -> None:
         """On the worker thread: its timer slack and priority, then the wait for subscribers."""
         set_timer_slack(1)
-        set_realtime_priority(self.settings.realtime_priority)
-        if self.mode == "replay" or self._waits():
+        self._realtime = set_realtime_priority(self.settings.realtime_priority)
+        if self.mode != "can" or self._waits():
             self._wait_for_graph()
 
     # -- replay ------------------------------------------------------------------------
@@ -177,10 +185,9 @@ class PressureSourceNode(Node):
             short = {n: (count(n), c) for n, c in topics.items() if count(n) < c}
             pending = unmatched()
             if not short and not pending:
-                if time.monotonic() - started > 1.0:
-                    self.get_logger().info(
-                        f"subscribers matched after {time.monotonic() - started:.1f} s: starting"
-                    )
+                self.get_logger().info(
+                    f"subscribers matched after {time.monotonic() - started:.1f} s: starting"
+                )
                 return
             waiting = [f"{n} ({have} of {want})" for n, (have, want) in sorted(short.items())]
             waiting += [f"{n} (a subscriber not matched yet)" for n in pending if n not in short]
@@ -227,12 +234,14 @@ class PressureSourceNode(Node):
             self._stop.wait(settings.start_delay)
             self.state = "playing"
             outputs = [self._output(spec) for spec in replay.specs]
+            # A spin at normal priority buys no timing and takes the CPU the chain needs.
+            spin_us = settings.spin_margin_us if self._realtime else 0
             replay.play(
                 outputs,
                 self._stop,
                 settings.rate,
                 settings.loop,
-                settings.spin_margin_us,
+                spin_us,
                 self._followers,  # the list itself: a node paired later is seen
             )
         finally:
@@ -288,6 +297,89 @@ class PressureSourceNode(Node):
         self.state = "acquiring"
         acquisition.run(outputs, self._stop)
 
+    # -- CAN log -----------------------------------------------------------------------
+
+    def _prepare_can_log(self) -> None:
+        settings = self.settings
+        if not settings.can_log:
+            raise BrakeHilError("can_log: no CAN log given (parameter can_log)")
+        self._can_log = log = CanLogReplay(
+            settings.can_log,
+            settings.dbc_file,
+            settings.publish_measured,
+            self._report,
+            settings.rate,
+            StampMode(settings.stamp_mode),
+            settings.stale_after_ms / 1e3,
+        )
+        self._acquisition = log.acquisition
+        self._advertise([QUANTITY_TOPICS[q] for q in log.quantities])
+        self.get_logger().info(
+            f"replaying the CAN log {settings.can_log}: {len(log.frames)} frames over "
+            f"{log.duration_s:.3f} s, {', '.join(log.quantities)} at rate {settings.rate:g}"
+        )
+
+    def _play_can_log(self) -> None:
+        log = self._can_log
+        assert log is not None
+        self._start_worker()
+        self._stop.wait(self.settings.start_delay)
+        if self._stop.is_set():
+            return
+        self.state = "playing"
+        outputs = {q: self._output(QUANTITY_TOPICS[q]) for q in log.quantities}
+        if log.run(outputs, self._stop):
+            self.state = "finished"
+            self.get_logger().info(f"CAN log finished: {self._log_counts()}")
+            self._report()
+            if self.settings.exit_at_end:
+                self.exit_requested.set()
+
+    def _log_counts(self) -> str:
+        health = self.daq_health()
+        return (
+            f"{self.published} samples published; {health['lost_samples']} lost in the log, "
+            f"{health['stale_counters']} frames with a frozen counter, "
+            f"{health['crc_errors'] + health['dlc_errors'] + health['unknown_ids']} bad frames"
+        )
+
+    def daq_health(self) -> dict[str, Any]:
+        """The DAQ's counters (CAN and CAN log modes)."""
+        assert self._acquisition is not None
+        return self._acquisition.summary()
+
+    def _can_log_status(self, failed: bool) -> Any:
+        log = self._can_log
+        assert log is not None
+        level, message, values = log.acquisition.status()
+        values.update(
+            state=self.state,
+            can_log=str(log.path),
+            frames=len(log.frames),
+            replayed=log.replayed,
+            rate=self.settings.rate,
+        )
+        if self.state == "finished":  # the log's end: no longer live, judged by its counts
+            health = self.daq_health()
+            faults = sum(
+                health[key]
+                for key in (
+                    "lost_samples",
+                    "stale_counters",
+                    "crc_errors",
+                    "dlc_errors",
+                    "unknown_ids",
+                    "bus_errors",
+                )
+            )
+            level = common.WARN if faults else common.OK
+            message = f"CAN log finished: {self._log_counts()}"
+        elif self.state != "playing":
+            level, message = common.STALE, f"CAN log {self.state}"
+        if failed:
+            level, message = common.ERROR, self.state
+        return common.diagnostic_status(f"{NAME}: can_log", level, message, values)
+
     # -- reporting -----------------------------------------------------------------------
 
     def _report(self) -> None:
@@ -297,6 +389,8 @@ class PressureSourceNode(Node):
     def statuses(self) -> list[Any]:
         """The node's diagnostics now."""
         failed = self.state.startswith("failed")
+        if self._can_log is not None:
+            return [self._can_log_status(failed)]
         if self._acquisition is not None:
             level, message, values = self._acquisition.status()
             values["interface"] = self.settings.can_interface
@@ -347,7 +441,9 @@ class PressureSourceNode(Node):
                 "passes": self.passes,
                 "period_error": self.statistics.total["period_error"].summary().as_dict(),
             }
-            if self._acquisition is not None:
+            if self._can_log is not None:
+                summary["can_log"] = self._can_log.summary()
+            elif self._acquisition is not None:
                 summary["daq"] = self._acquisition.summary()
             common.write_summary(self.settings.statistics_file, summary)
 

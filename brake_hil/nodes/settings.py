@@ -121,10 +121,15 @@ class PressureSourceSettings:
     until every published topic has ``wait_for_subscribers`` subscribers and every topic of
     ``wait_for_topics`` (``/topic`` or ``/topic:N``) has one (or N), then ``start_delay``. In
     ``can`` mode the same wait, when asked for, comes before the DAQ is opened (a rig or an
-    emulator that starts sending once its port is open sends to a matched graph).
+    emulator that starts sending once its port is open sends to a matched graph). ``can_log``
+    replays a lab's CAN log (:class:`~brake_hil.io.can_log.CanLogReplay`) through the DBC with
+    the ``can`` mode's checks, paced by ``rate``, stamped per ``stamp_mode``, after the same
+    wait as a replay.
     """
 
-    mode: str = parameter("replay", "replay: a recording; can: the rig's DAQ over CAN")
+    mode: str = parameter(
+        "replay", "replay: a recording; can: the rig's DAQ over CAN; can_log: a lab's CAN log"
+    )
     publish_measured: bool = parameter(True, "also publish p_b, F_k, x_c (and p_a) when present")
     frame_id: str = parameter("caliper", "header.frame_id of every message")
     spin_margin_us: int = parameter(
@@ -134,31 +139,36 @@ class PressureSourceSettings:
     diagnostics_period: float = parameter(1.0, "diagnostics period", "s")
     statistics_file: str = parameter("", "counts and replay timing JSON at shutdown; empty: none")
     recording: str = parameter("", "replay: rosbag2 directory, .mcap or .db3 (required)")
-    rate: float = parameter(1.0, "replay: rate factor (2.0 plays twice as fast)")
+    rate: float = parameter(1.0, "replay, can_log: rate factor (2.0 plays twice as fast)")
     loop: bool = parameter(False, "replay: start again at the end (stamps keep increasing)")
     start_offset: float = parameter(0.0, "replay: skip this much of the recording", "s")
     duration: float = parameter(0.0, "replay: play this long; 0: to the end", "s")
     stamp_mode: str = parameter(
         StampMode.SHIFT.value,
-        "replay: shift (first sample stamped now, spacing kept) or keep (recorded stamps)",
+        "replay, can_log: shift (first sample stamped now, spacing kept) or keep (recorded)",
     )
-    exit_at_end: bool = parameter(False, "replay: exit when the replay ends")
+    exit_at_end: bool = parameter(False, "replay, can_log: exit when the replay ends")
     wait_for_subscribers: int = parameter(0, "start once each topic has this many")
     wait_for_topics: tuple[str, ...] = parameter(
         ("",), 'and these topics ("/topic" or "/topic:N"); [""]: none'
     )
     wait_timeout: float = parameter(10.0, "start anyway after this wait", "s")
     start_delay: float = parameter(
-        0.5, "replay: delay after the wait, before the first sample", "s"
+        0.5, "replay, can_log: delay after the wait, before the first sample", "s"
     )
     can_interface: str = parameter("virtual", "can: python-can interface (socketcan, slcan, ...)")
     can_channel: str = parameter("brake_hil", "can: python-can channel (slcan: serial device)")
     can_bitrate: int = parameter(1_000_000, "can: CAN bitrate", "bit/s")
-    dbc_file: str = parameter("config/brake_rig.dbc", "can: CAN database", package_file=True)
-    stale_after_ms: float = parameter(5.0, "can: STALE after this long without a good frame", "ms")
+    dbc_file: str = parameter(
+        "config/brake_rig.dbc", "can, can_log: CAN database", package_file=True
+    )
+    stale_after_ms: float = parameter(
+        5.0, "can, can_log: STALE after this long without a good frame", "ms"
+    )
     can_sleep_after_open: float = parameter(
         0.0, "can: wait after opening (slcan only: some USB adapters reset)", "s"
     )
+    can_log: str = parameter("", "can_log: BLF, ASC, TRC or candump .log file (required)")
 
 
 @dataclass(frozen=True)

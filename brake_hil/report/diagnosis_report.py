@@ -1,12 +1,14 @@
-"""The diagnosis as a test engineer reads it: one HTML page with its figures beside it.
+"""The diagnosis as a test engineer reads it: one self-contained HTML page.
 
-``DIR/report.html`` starts with a short summary in plain words (what was wrong, what physics,
-how much better, how sure, what to check on the rig), then the seed's Table 4-5 metrics
-before and after (one NRMSE definition, said once), measured against baseline against
-improved on held-out cycles with residuals, the residual over the phase of the 5 Hz cycle,
-harmonic bars (seed Table 1), the seal's hysteresis loop, the evidence, the calibration
-(rig values far outside their tolerance said in words), the hypotheses with why each is or
-is not the verdict, and the fitted parameters, those the data did not identify apart.
+``DIR/report.html`` (its figures inside it as PNG ``data:`` URIs: mailed, it keeps them)
+starts with a short summary in plain words (what was wrong, what physics, how much better,
+how sure, what to check on the rig), then the paper's Table 4-5 metrics before and after (the
+one NRMSE of ``compare``, said once, and the diagnosis's own held-out error beside it),
+the figures (:mod:`.diagnosis_figures`, each caption true to its figure), the evidence
+(the noise ratios in plain words), the calibration (rig values far outside their tolerance
+said in words), the hypotheses with the verdict's row marked and why each is or is not the
+verdict, the fitted parameters, and the next steps (:mod:`.next_steps`: the command to run
+the improved model live, what to check on the rig, how to re-test).
 """
 
 from __future__ import annotations
@@ -19,30 +21,27 @@ import math
 from pathlib import Path
 import re
 
-import matplotlib
-
-matplotlib.use("Agg")
-from matplotlib.figure import Figure  # noqa: E402
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from brake_hil import __version__  # noqa: E402
-from brake_hil.diagnosis.candidates import CANDIDATES  # noqa: E402
-from brake_hil.diagnosis.diagnose import (  # noqa: E402
+from brake_hil import __version__
+from brake_hil.diagnosis.candidates import CANDIDATES
+from brake_hil.diagnosis.diagnose import (
     Diagnosis,
     Verdict,
     hypothesis_note,
     ratio,
 )
-from brake_hil.diagnosis.evidence import PHASE_BINS  # noqa: E402
-from brake_hil.diagnosis.fitting import Fit, Model  # noqa: E402
-from brake_hil.files import output_file  # noqa: E402
-from brake_hil.physics.calibrated_values import VALUE_LABELS  # noqa: E402
-from brake_hil.physics.catalogue import CATALOGUE, entry_text  # noqa: E402
-from brake_hil.topics import OUTPUT_CHANNELS  # noqa: E402
+from brake_hil.diagnosis.fitting import Fit
+from brake_hil.files import output_file
+from brake_hil.physics.calibrated_values import VALUE_LABELS
+from brake_hil.physics.catalogue import CATALOGUE, entry_text
+from brake_hil.report.diagnosis_figures import DPI, figures
+from brake_hil.report.embed import image
+from brake_hil.report.next_steps import next_steps, noise_words
+from brake_hil.topics import OUTPUT_CHANNELS
 
 __all__ = [
+    "DPI",
     "FLAG_SIGMA",
+    "HELD_OUT_ERROR",
     "NRMSE_DEFINITION",
     "REPORT_FILES",
     "RIG_CHECKS",
@@ -50,27 +49,29 @@ __all__ = [
     "findings",
     "identified",
     "improved_multipliers",
+    "nrmse_as_fraction",
     "write_report",
 ]
 
-REPORT_FILES = (
-    "report.html",
-    "held_out.png",
-    "residual_phase.png",
-    "harmonics.png",
-    "hysteresis.png",
-)
-"""The files :func:`write_report` writes into its folder."""
-
-UNITS = {"p_b": ("MPa", 1e-6), "F_k": ("kN", 1e-3), "x_c": ("um", 1e6)}
-COLOURS = {"measured": "black", "baseline": "tab:blue", "improved": "tab:red"}
-DPI = 130
-LEGEND_SIZE = 10
+REPORT_FILES = ("report.html",)
+"""The files :func:`write_report` writes into its folder (the figures are inside it)."""
 
 NRMSE_DEFINITION = (
-    "NRMSE is the RMS of (predicted - measured) over the measured peak-to-peak, per 5 Hz "
-    "cycle, averaged over the held-out cycles (the seed's Tables 4-5); every NRMSE on this "
-    "page is this one."
+    "NRMSE is the paper's (Tables 4-5) and <code>brake-hil compare</code>'s: the RMS of "
+    "(predicted - measured) over the measured peak-to-peak of each steady window, as a "
+    "fraction (0.41, not 41 %), averaged over the windows weighted by their 5 Hz cycles. "
+    "Here it is taken on the held-out windows, with the calibrated LTI model (baseline) and "
+    "the improved one; <code>compare</code> takes it with the rig file's nominal model over "
+    "every steady segment, so its figure differs by the model and the data, not the measure. "
+    "Every NRMSE on this page is this one."
+)
+HELD_OUT_ERROR = (
+    "The <b>held-out error</b> is the diagnosis's own measure, the one its fits minimise and "
+    "its hypotheses are ranked by: per channel, the RMS residual over the held-out cycles "
+    "divided by the channel's peak-to-peak over all the steady segments together (NRMSE "
+    "divides by each window's own, which is smaller when the segments sit at different "
+    "pressures, so NRMSE reads larger), squared and averaged over the three channels; a "
+    "hypothesis's \"error cut\" is the baseline's held-out error over its own."
 )
 FLAG_SIGMA = 3.0
 """A calibration multiplier this many prior sigmas from 1 is a finding about the rig file."""
@@ -86,7 +87,7 @@ RIG_CHECKS: Mapping[str, str] = entry_text("rig_check")
 
 
 def write_report(diagnosis: Diagnosis, out: Path, rig_path: Path | None = None) -> Path:
-    """Write ``report.html`` and its PNG figures into ``out``; return the page's path.
+    """Write ``report.html`` (its figures inside it) into ``out``; return the page's path.
 
     Args:
         diagnosis: what :func:`~brake_hil.diagnosis.diagnose.diagnose` found.
@@ -94,14 +95,8 @@ def write_report(diagnosis: Diagnosis, out: Path, rig_path: Path | None = None) 
         rig_path: the nominal rig file the diagnosis used, named on the page.
     """
     out.mkdir(parents=True, exist_ok=True)
-    figures = [
-        _time_plot(diagnosis, output_file(out, "held_out.png")),
-        _phase_plot(diagnosis, output_file(out, "residual_phase.png")),
-        _harmonics_plot(diagnosis, output_file(out, "harmonics.png")),
-        _loop_plot(diagnosis, output_file(out, "hysteresis.png")),
-    ]
     page = output_file(out, "report.html")
-    page.write_text(_html(diagnosis, [f.name for f in figures], rig_path), encoding="utf-8")
+    page.write_text(_html(diagnosis, out, rig_path), encoding="utf-8")
     return page
 
 
@@ -171,18 +166,59 @@ def _text(raw: str) -> str:
     return re.sub(r"``(.+?)``", r"<code>\1</code>", escaped).replace("``", "")
 
 
-def _confidence_words(confidence: float, doubt: str | None = None) -> str:
+_PERCENT = r"(\d+(?:\.\d+)?) %"
+
+
+def nrmse_as_fraction(text: str) -> str:
+    """The diagnosis's words with every NRMSE on one scale, a fraction as ``compare`` prints.
+
+    ``14.16 % NRMSE`` -> ``NRMSE 0.1416``; ``NRMSE 14.16 % -> 2.10 %`` -> ``NRMSE 0.1416 ->
+    0.0210``; ``NRMSE at most 0.80 %`` -> ``NRMSE at most 0.0080``.
+    """
+
+    def fraction(match: re.Match[str]) -> str:
+        return f"{float(match.group(0).split()[0]) / 100:.4f}"
+
+    text = re.sub(_PERCENT + " NRMSE", lambda m: f"NRMSE {fraction(m)}", text)
+    return re.sub(
+        r"(NRMSE(?: at most)? )" + _PERCENT + r"(?: -> " + _PERCENT + ")?",
+        lambda m: (
+            m.group(1)
+            + f"{float(m.group(2)) / 100:.4f}"
+            + (f" -> {float(m.group(3)) / 100:.4f}" if m.group(3) else "")
+        ),
+        text,
+    )
+
+
+def _confidence_words(
+    confidence: float, doubt: str | None = None, runner_up: str | None = None
+) -> str:
     if confidence >= 0.9:
         return "high"
     if doubt is not None and confidence >= 0.5:
         return "moderate: not sure it is alone (what to check, below)"
     if confidence >= 0.7:
-        return "moderate: check the runner-up below"
+        other = f" ({html.escape(runner_up)})" if runner_up else ""
+        return (
+            f"moderate: check the runner-up{other}, the best hypothesis other than the "
+            "verdict, in the hypotheses table"
+        )
     return "low: treat the verdict as a hint, not a finding"
 
 
-def _percent(value: float) -> str:
-    return f"{100 * value:.2f} %"
+def _runner_up(diagnosis: Diagnosis) -> str | None:
+    """The hypothesis with the largest held-out error cut that is not the verdict."""
+    chosen = _verdict(diagnosis).chosen
+    others = [h for h in diagnosis.hypotheses if h.effects != chosen]
+    if not others:
+        return None
+    return " + ".join(min(others, key=lambda h: h.held_out_cost).effects)
+
+
+def _nrmse(value: float) -> str:
+    """An NRMSE as ``compare`` prints it: a fraction, not a percentage."""
+    return f"{value:.4f}"
 
 
 def _summary(diagnosis: Diagnosis, findings: list[Finding]) -> str:
@@ -197,8 +233,8 @@ def _summary(diagnosis: Diagnosis, findings: list[Finding]) -> str:
         items.append(f"<b>The physics:</b> {physics}")
         items.append(
             f"<b>How much better:</b> on cycles no fit saw, {worst} NRMSE "
-            f"{_percent(before[worst]['nrmse'])} with the calibrated LTI model, "
-            f"{_percent(after[worst]['nrmse'])} with the improved one "
+            f"{_nrmse(before[worst]['nrmse'])} with the calibrated LTI model, "
+            f"{_nrmse(after[worst]['nrmse'])} with the improved one "
             f"(peak-to-peak {before[worst]['ptp_ratio_pct']:.1f} % -> "
             f"{after[worst]['ptp_ratio_pct']:.1f} % of measured)."
         )
@@ -206,176 +242,62 @@ def _summary(diagnosis: Diagnosis, findings: list[Finding]) -> str:
         items.append(
             "<b>What was wrong:</b> the LTI model misses the recording by more than its noise, "
             f"and none of the {len(CANDIDATES)} candidate physics explains it "
-            f"({worst} NRMSE {_percent(before[worst]['nrmse'])}). Something outside the "
+            f"({worst} NRMSE {_nrmse(before[worst]['nrmse'])}). Something outside the "
             "library: look at the sensors' calibration and the rig's build."
         )
     else:
         items.append(
             "<b>What was wrong:</b> nothing the data can show: the calibrated LTI model "
             f"explains the recording (worst channel {worst}, NRMSE "
-            f"{_percent(before[worst]['nrmse'])})."
+            f"{_nrmse(before[worst]['nrmse'])})."
         )
     doubt = diagnosis.summary.doubt(tuple(effects)) if effects else None
     items.append(
-        f"<b>How sure:</b> {_confidence_words(diagnosis.confidence, doubt)} "
+        f"<b>How sure:</b> "
+        f"{_confidence_words(diagnosis.confidence, doubt, _runner_up(diagnosis))} "
         f"(confidence {diagnosis.confidence:.2f})."
     )
-    checks = [RIG_CHECKS[e] for e in effects if e in RIG_CHECKS]
-    checks += [f"what else is there: {doubt}"] if doubt is not None else []
-    checks += [f.words for f in findings]
+    checks = _rig_checks(diagnosis, findings)
     if checks:
-        listed = "".join(f"<li>{_text(c)}</li>" for c in checks)
+        listed = "".join(f"<li>{c}</li>" for c in checks)
         items.append(f"<b>What to check on the rig:</b><ul>{listed}</ul>")
     else:
         items.append("<b>What to check on the rig:</b> nothing stands out.")
     return "<ul class=summary>" + "".join(f"<li>{i}</li>" for i in items) + "</ul>"
 
 
-# --------------------------------------------------------------------------- figures
+def _rig_checks(diagnosis: Diagnosis, findings: list[Finding]) -> list[str]:
+    """What to check on the rig (HTML items): the effects' rig checks, the doubt, the file."""
+    effects = tuple(e for e in diagnosis.effects if e in CATALOGUE)
+    doubt = diagnosis.summary.doubt(effects) if effects else None
+    checks = [RIG_CHECKS[e] for e in effects if e in RIG_CHECKS]
+    checks += [f"what else is there: {doubt}"] if doubt is not None else []
+    checks += [f.words for f in findings]
+    return [_text(c) for c in checks]
 
 
-def _held_out_signals(diagnosis: Diagnosis) -> dict[str, dict[str, np.ndarray]]:
-    ds = diagnosis.dataset
-    window = ds.held_out[0]
-    cal = diagnosis.calibration
-    result: dict[str, dict[str, np.ndarray]] = {}
-    for label, fitted in (("baseline", diagnosis.baseline), ("improved", diagnosis.improved)):
-        known = {c.name: c for c in CANDIDATES}
-        model = Model(cal, [known[e] for e in fitted.effects if e in known], ds)
-        outputs, index = model.simulate(window, fitted.theta[None, :])
-        result[label] = {key: outputs[0, c] for c, key in enumerate(OUTPUT_CHANNELS)}
-        result["time"] = {"t": ds.time[index]}
-        result["measured"] = {key: ds.measured[key][index] for key in OUTPUT_CHANNELS}
-    return result
-
-
-def _time_plot(diagnosis: Diagnosis, path: Path) -> Path:
-    data = _held_out_signals(diagnosis)
-    time = data["time"]["t"]
-    shown = time < time[0] + 4 * diagnosis.dataset.period
-    figure, axes = plt.subplots(2, 3, figsize=(15, 7), gridspec_kw={"height_ratios": [3, 1.3]})
-    for column, key in enumerate(OUTPUT_CHANNELS):
-        unit, scale = UNITS[key]
-        top, bottom = axes[0, column], axes[1, column]
-        top.plot(
-            time[shown],
-            data["measured"][key][shown] * scale,
-            color=COLOURS["measured"],
-            lw=3.0,
-            alpha=0.45,
-            label="measured",
-        )
-        for label in ("baseline", "improved"):
-            top.plot(
-                time[shown],
-                data[label][key][shown] * scale,
-                "--",
-                color=COLOURS[label],
-                label=label,
-                lw=1.4,
+def _evidence(diagnosis: Diagnosis) -> str:
+    """The evidence's lines; its residual and noise lines in plain words."""
+    values = diagnosis.evidence.values
+    items = []
+    for line in diagnosis.evidence.findings:
+        if line.startswith("measurement noise") and "misfit_over_noise" in values:
+            line = (
+                f"{noise_words(values['misfit_over_noise'])}: the calibrated LTI model's RMS "
+                "error over the steady cycles, against the cycle-to-cycle sensor noise "
+                f"({100 * values.get('noise_nrmse', math.nan):.3f} % of peak-to-peak)"
             )
-        for label in ("baseline", "improved"):
-            bottom.plot(
-                time[shown],
-                (data[label][key] - data["measured"][key])[shown] * scale,
-                color=COLOURS[label],
-                lw=1.0,
-                label=label,
+        elif line.startswith("calibrated LTI baseline's RMS residual"):
+            shown = [k for k in OUTPUT_CHANNELS if f"nrmse_{k}" in values]
+            errors = ", ".join(f"{k} {values[f'nrmse_{k}']:.4f}" for k in shown)
+            tail = line[line.index(";") :] if ";" in line else ""
+            line = (
+                "calibrated LTI model's RMS residual over the steady cycles, as a fraction of "
+                "the peak-to-peak over all the steady segments (the held-out error's scale, "
+                f"not NRMSE's): {errors}{tail.replace('above 1 %', 'above 0.01')}"
             )
-        top.set_title(f"{key}, held-out cycles", fontsize=11)
-        top.set_ylabel(unit)
-        bottom.set_ylabel(f"residual, {unit}")
-        bottom.set_xlabel("time, s")
-        bottom.axhline(0.0, color="grey", lw=0.8)
-        for axis in (top, bottom):
-            axis.grid(alpha=0.3)
-        top.legend(fontsize=LEGEND_SIZE)
-    figure.suptitle("measured vs baseline (calibrated LTI) vs improved, on data not fitted")
-    return _save(figure, path)
-
-
-def _phase_plot(diagnosis: Diagnosis, path: Path) -> Path:
-    figure, axis = plt.subplots(figsize=(8, 4.5))
-    degrees = (np.arange(PHASE_BINS) + 0.5) * 360.0 / PHASE_BINS
-    for key, profile in diagnosis.evidence.phase_profile.items():
-        axis.plot(degrees, 100 * np.array(profile), marker="o", ms=3, label=key)
-    axis.set_xlabel("phase of the input cycle, deg (0: p_i rising through its mean)")
-    axis.set_ylabel("baseline RMS residual, % of ptp")
-    axis.set_title("where in the 5 Hz cycle the baseline misses")
-    axis.grid(alpha=0.3)
-    axis.legend(fontsize=LEGEND_SIZE)
-    return _save(figure, path)
-
-
-def _harmonics_plot(diagnosis: Diagnosis, path: Path) -> Path:
-    harmonics = diagnosis.evidence.harmonics
-    keys = list(harmonics.get("measured", {}))
-    columns = 2
-    rows = max(1, math.ceil(len(keys) / columns))
-    figure, axes = plt.subplots(rows, columns, figsize=(12, 3.8 * rows), squeeze=False)
-    axes = axes.ravel()
-    for spare in axes[len(keys) :]:
-        spare.axis("off")
-    for axis, key in zip(axes, keys):
-        measured = np.array(harmonics["measured"][key])[1:]
-        predicted = np.array(harmonics["predicted"][key])[1:]
-        orders = np.arange(2, 2 + measured.size) * 5
-        axis.bar(orders - 1, measured, width=2, color="black", label="measured")
-        axis.bar(orders + 1, predicted, width=2, color="tab:blue", label="baseline")
-        axis.set_xticks(orders)
-        axis.set_title(f"{key}: super-harmonics (seed Table 1)", fontsize=10)
-        axis.set_xlabel("Hz")
-        axis.set_ylabel("% of energy at 5-25 Hz")
-        axis.legend(fontsize=LEGEND_SIZE)
-    return _save(figure, path)
-
-
-def _seal_loop(
-    diagnosis: Diagnosis, signals_of: dict[str, np.ndarray]
-) -> tuple[np.ndarray, np.ndarray]:
-    """Seal displacement ``x_s = F_k / k_k - x_c`` (m) and force ``F_s = A_ep p_b - F_k`` (N).
-
-    The seed's characterisation (eq. 21e without the piston's small inertia), from the
-    30 Hz low-passed signals, so a stick-slip parallelogram keeps its corners.
-    """
-    window = diagnosis.dataset.held_out[0]
-    parameters = diagnosis.calibration.parameters(window.mean_pressure)
-    x_s = signals_of["F_k"] / parameters.block_stiffness - signals_of["x_c"]
-    f_s = parameters.piston_area * signals_of["p_b"] - signals_of["F_k"]
-    return x_s - x_s.mean(), f_s - f_s.mean()
-
-
-def _loop_plot(diagnosis: Diagnosis, path: Path) -> Path:
-    data = _held_out_signals(diagnosis)
-    figure, axis = plt.subplots(figsize=(7, 5.5))
-    samples = int(round(2 * diagnosis.dataset.period / diagnosis.dataset.sample_time))
-    for label in ("measured", "baseline", "improved"):
-        x_s, f_s = _seal_loop(diagnosis, data[label])
-        middle = x_s.size // 2
-        part = slice(middle, middle + samples)
-        measured = label == "measured"
-        axis.plot(
-            x_s[part] * 1e6,
-            f_s[part],
-            "-" if measured else "--",
-            color=COLOURS[label],
-            lw=3.0 if measured else 1.4,
-            alpha=0.45 if measured else 1.0,
-            label=label,
-        )
-    axis.set_xlabel("seal displacement x_s = F_k/k_k - x_c, um (mean removed)")
-    axis.set_ylabel("seal force F_s = A_ep p_b - F_k, N (mean removed)")
-    axis.set_title("seal hysteresis loop, two held-out cycles")
-    axis.grid(alpha=0.3)
-    axis.legend(fontsize=LEGEND_SIZE)
-    return _save(figure, path)
-
-
-def _save(figure: Figure, path: Path) -> Path:
-    figure.tight_layout()
-    figure.savefig(path, dpi=DPI)
-    plt.close(figure)
-    return path
+        items.append(f"<li>{_text(line)}</li>")
+    return "<ul>" + "".join(items) + "</ul>"
 
 
 # --------------------------------------------------------------------------- tables
@@ -389,13 +311,13 @@ def _metrics_table(diagnosis: Diagnosis) -> str:
         rows.append(
             f"<tr><td>{key}</td><td>{b['ptp_ratio_pct']:.1f}</td><td>{i['ptp_ratio_pct']:.1f}</td>"
             f"<td>{b['tau_over_T_pct']:+.2f}</td><td>{i['tau_over_T_pct']:+.2f}</td>"
-            f"<td>{100 * b['nrmse']:.2f}</td><td>{100 * i['nrmse']:.2f}</td></tr>"
+            f"<td>{_nrmse(b['nrmse'])}</td><td>{_nrmse(i['nrmse'])}</td></tr>"
         )
     return (
-        f"<p>{NRMSE_DEFINITION}</p>"
+        f"<p>{NRMSE_DEFINITION}</p><p>{HELD_OUT_ERROR}</p>"
         "<table><tr><th>channel</th><th>ptp % baseline</th><th>ptp % improved</th>"
-        "<th>tau/T % baseline</th><th>tau/T % improved</th><th>NRMSE % baseline</th>"
-        "<th>NRMSE % improved</th></tr>" + "".join(rows) + "</table>"
+        "<th>tau/T % baseline</th><th>tau/T % improved</th><th>NRMSE baseline</th>"
+        "<th>NRMSE improved</th></tr>" + "".join(rows) + "</table>"
     )
 
 
@@ -428,9 +350,11 @@ def _hypotheses_table(diagnosis: Diagnosis) -> str:
     for fit in ranked:
         known, unknown = _parameter_cells(fit)
         note = hypothesis_note(diagnosis.summary, fit.effects, verdict)
-        mark = ' class="verdict"' if fit.effects == chosen else ""
+        is_verdict = fit.effects == chosen
+        mark = ' class="verdict"' if is_verdict else ""
+        flag = " <span class=flag>&#9664; the verdict</span>" if is_verdict else ""
         rows.append(
-            f"<tr{mark}><td>{' + '.join(fit.effects)}</td>"
+            f"<tr{mark}><td>{' + '.join(fit.effects)}{flag}</td>"
             f"<td>{ratio(base, fit.held_out_cost):.1f}</td><td>{html.escape(note)}</td>"
             f"<td>{known}</td><td>{unknown}</td></tr>"
         )
@@ -442,8 +366,21 @@ def _hypotheses_table(diagnosis: Diagnosis) -> str:
             f"<p class=why><b>Why the top row is not the verdict:</b> "
             f"{' + '.join(top.effects)} is {html.escape(note)}.</p>"
         )
+    place = next((n for n, h in enumerate(ranked, start=1) if h.effects == chosen), None)
+    where = (
+        f"The verdict is marked (row {place} of {len(ranked)}). "
+        if place is not None
+        else "No row is the verdict: no hypothesis was named. "
+    )
+    order = (
+        f"<p class=order>{where}Rows are in order of the held-out error cut, largest first: "
+        "how much each hypothesis's model cuts the held-out error. The verdict is not always "
+        "the top row: a hypothesis is named only when it also passes the decision's rules "
+        "(the pair rule, the charge per fitted parameter, the physics checks below); the "
+        "decision column says why each row is or is not the verdict.</p>"
+    )
     return (
-        f"{lead}<table><tr><th>hypothesis</th><th>held-out error cut (x)</th>"
+        f"{order}{lead}<table><tr><th>hypothesis</th><th>held-out error cut (x)</th>"
         "<th>decision</th><th>parameters the data identified (± one sigma)</th>"
         "<th>not identified (sigma over half the value)</th></tr>" + "".join(rows) + "</table>"
     )
@@ -479,17 +416,28 @@ def _calibration_table(diagnosis: Diagnosis, flagged: list[Finding]) -> str:
             words = "within its tolerance"
         rows.append(
             f"<tr><td>{html.escape(MULTIPLIER_WORDS.get(name, name))}</td>"
-            f"<td>x{before:.3f} ({z_before:+.1f})</td><td>x{after:.3f} ({z_after:+.1f})</td>"
+            f"<td>{_multiplier_words(before, z_before)}</td>"
+            f"<td>{_multiplier_words(after, z_after)}</td>"
             f"<td>{words}</td></tr>"
         )
     return (
-        "<p>Multipliers of the rig file's values (1: the file is right; in brackets, sigmas "
-        "of the tolerance the rig file states), fitted with the LTI model alone and with "
-        f"the verdict's physics. At {FLAG_SIGMA:g} sigma or more with the verdict's "
-        "physics, the rig file's value is itself a finding.</p>"
+        "<p>Each value as the data put it, over the rig file's value (1: the file is right), "
+        "and how many of the tolerances the rig file states it sits from it, fitted with the "
+        f"LTI model alone and with the verdict's physics. At {FLAG_SIGMA:g} tolerances or "
+        "more with the verdict's physics, the rig file's value is itself a finding.</p>"
         "<table><tr><th>value</th><th>LTI model alone</th><th>with the verdict's physics"
         "</th><th>finding</th></tr>" + "".join(rows) + "</table>"
     )
+
+
+def _multiplier_words(multiplier: float, tolerances: float) -> str:
+    """``0.024 of the file's value, 7.5 tolerances below`` (not ``x0.024 (-7.5)``)."""
+    if abs(tolerances) < 0.05:
+        where = "at the file's value"
+    else:
+        side = "below" if tolerances < 0 else "above"
+        where = f"{abs(tolerances):.1f} tolerance{'' if abs(tolerances) == 1 else 's'} {side}"
+    return f"{multiplier:.3f} of the file's value, {where}"
 
 
 def _checks_table(diagnosis: Diagnosis) -> str:
@@ -534,24 +482,28 @@ def _forms_table(diagnosis: Diagnosis) -> str:
     )
 
 
-def _html(diagnosis: Diagnosis, figures: list[str], rig_path: Path | None) -> str:
+def _figures(diagnosis: Diagnosis) -> str:
+    shown = figures(diagnosis).shown
+    return "".join(image(uri, alt, caption) for uri, alt, caption in shown)
+
+
+def _html(diagnosis: Diagnosis, out: Path, rig_path: Path | None) -> str:
     verdict = ", ".join(diagnosis.effects) or "no missing physics"
     findings = calibration_findings(diagnosis)
-    evidence = "".join(f"<li>{_text(line)}</li>" for line in diagnosis.evidence.findings)
     ds = diagnosis.dataset
     length = float(ds.time[-1] - ds.time[0] + ds.sample_time)
-    images = "".join(
-        f'<p><img src="{name}" alt="{name}" style="max-width:100%"></p>' for name in figures
-    )
     when = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
     rig = html.escape(str(rig_path)) if rig_path is not None else "not given"
+    named = bool(diagnosis.effects) and diagnosis.effects != ("unexplained",)
+    steps = next_steps(diagnosis.recording, out, rig_path, named, _rig_checks(diagnosis, findings))
     return f"""<!DOCTYPE html>
 <html><head><meta charset="utf-8"><title>brake_hil diagnosis: {html.escape(verdict)}</title>
 <style>body{{font-family:sans-serif;max-width:1200px;margin:auto;line-height:1.4}}
 td,th{{border:1px solid #ccc;padding:3px 8px;vertical-align:top}}
 table{{border-collapse:collapse}}tr.verdict{{background:#e8f4e8;font-weight:bold}}
-p.why{{background:#fff6e0;padding:6px}}ul.summary li{{margin:4px 0}}
-.meta{{color:#444}}</style>
+.flag{{color:#1a7f37;white-space:nowrap}}p.why{{background:#fff6e0;padding:6px}}
+ul.summary li{{margin:4px 0}}figure{{margin:12px 0}}figcaption{{color:#333}}
+pre{{background:#f4f4f4;padding:6px;overflow-x:auto}}.meta{{color:#444}}</style>
 </head><body>
 <h1>Diagnosis: {html.escape(verdict)}</h1>
 <p class=meta><b>Recording:</b> {html.escape(diagnosis.recording)} ({length:.1f} s)<br>
@@ -559,14 +511,15 @@ p.why{{background:#fff6e0;padding:6px}}ul.summary li{{margin:4px 0}}
 <b>Made:</b> {when} by brake_hil {__version__}</p>
 <h2>In short</h2>
 {_summary(diagnosis, findings)}
-<p>{_text(diagnosis.explanation)}</p>
-<h2>Seed metrics on held-out data (Tables 4-5)</h2>{_metrics_table(diagnosis)}
-{images}
-<h2>Evidence</h2><ul>{evidence}</ul>
+<p>{_text(nrmse_as_fraction(diagnosis.explanation))}</p>
+<h2>The paper's metrics on held-out data (Tables 4-5)</h2>{_metrics_table(diagnosis)}
+{_figures(diagnosis)}
+<h2>Evidence</h2>{_evidence(diagnosis)}
 <h2>Calibration: is the rig file right?</h2>{_calibration_table(diagnosis, findings)}
-<h2>Hypotheses (held-out mean squared error, baseline over hypothesis)</h2>
+<h2>Hypotheses (held-out error cut: the baseline's held-out error over the hypothesis's)</h2>
 {_hypotheses_table(diagnosis)}
 <h2>Physics checks</h2>{_checks_table(diagnosis)}
 {_forms_table(diagnosis)}
+{steps}
 </body></html>
 """

@@ -1,7 +1,8 @@
 """A rig's health over time as a test engineer reads it: one HTML page, a figure per rig.
 
-``OUT/trend.html`` says first, per rig, what moved out of its tolerance in plain words (or
-that nothing did), then shows the rig's figure (``OUT/trend_<rig>.png``: a small panel per
+``OUT/trend.html``, one self-contained file (figures embedded as PNG ``data:`` URIs), says
+first, per rig, what moved out of its tolerance in plain words (or that nothing did), then
+shows the rig's figure (a small panel per
 calibrated value, its multiplier over the rig file's value against the run number with the
 rig file's tolerance band shaded and the robust trend line; a panel per effect, how many
 times it cuts the held-out error, with the runs whose verdict named it marked), and a table
@@ -16,7 +17,6 @@ from datetime import UTC, datetime
 import html
 import math
 from pathlib import Path
-import re
 from typing import Any
 
 import matplotlib
@@ -28,10 +28,14 @@ from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator, NullLocator  # noqa: E402
+import numpy as np  # noqa: E402
 
 from brake_hil import __version__  # noqa: E402
 from brake_hil.files import check_output_folder, output_file  # noqa: E402
 from brake_hil.report.diagnosis_report import DPI, RIG_CHECKS  # noqa: E402
+from brake_hil.report.embed import image, png_data_uri  # noqa: E402
+from brake_hil.report.metrics_trend_report import metrics_sections  # noqa: E402
+from brake_hil.results.metrics_trend import RecordingTrend  # noqa: E402
 from brake_hil.results.trend import (  # noqa: E402
     CONFIDENCE,
     MIN_CHANGE,
@@ -39,13 +43,15 @@ from brake_hil.results.trend import (  # noqa: E402
     MIN_RUNS,
     NAMED_SHARE,
     OFFSET_SHARE,
+    OUTSIDE_SIGMA,
     SIGNIFICANCE,
+    TREND_RUNS,
     Movement,
     RigTrend,
     Series,
 )
 
-__all__ = ["PAGE", "figure_name", "write_trend_report"]
+__all__ = ["PAGE", "write_trend_report"]
 
 PAGE = "trend.html"
 """The page :func:`write_trend_report` writes into its folder."""
@@ -56,45 +62,34 @@ FOUND = "tab:red"
 STEADY = "tab:blue"  # a fitted line that is no trend beyond doubt
 
 
-def figure_name(rig: str, taken: set[str] | None = None) -> str:
-    """The PNG of a rig's figure: ``trend_<rig name in letters, digits and _>.png``."""
-    slug = re.sub(r"[^A-Za-z0-9]+", "_", rig).strip("_")[:60] or "rig"
-    name, number = f"trend_{slug}.png", 2
-    while taken is not None and name in taken:
-        name, number = f"trend_{slug}_{number}.png", number + 1
-    return name
-
-
 def write_trend_report(
-    trends: Sequence[RigTrend], out: Path, database: Path | str | None = None
+    trends: Sequence[RigTrend],
+    out: Path,
+    database: Path | str | None = None,
+    metrics: Sequence[RecordingTrend] = (),
 ) -> Path:
-    """Write ``trend.html`` and one PNG per rig into ``out``; return the page's path.
+    """Write ``trend.html`` (its figures inside it) into ``out``; return the page's path.
 
     Args:
         trends: one per rig (:func:`~brake_hil.results.trend.trends`).
         out: the folder (made if missing; nothing is written through a link leading out).
         database: the results database, named on the page.
+        metrics: the regressions' and comparisons' trends, one per recording.
 
     Raises:
         OutputError: the folder or a file in it cannot be written.
     """
-    taken: set[str] = set()
-    names = []
-    for trend in trends:
-        names.append(figure_name(trend.rig, taken))
-        taken.add(names[-1])
-    check_output_folder(out, (PAGE, *names))
-    for trend, name in zip(trends, names):
-        _rig_figure(trend, output_file(out, name))
+    check_output_folder(out, (PAGE,))
+    figures = [_rig_figure(trend) for trend in trends]
     page = output_file(out, PAGE)
-    page.write_text(_html(trends, names, database), encoding="utf-8")
+    page.write_text(_html(trends, figures, database, metrics), encoding="utf-8")
     return page
 
 
 # --------------------------------------------------------------------------- figures
 
 
-def _rig_figure(trend: RigTrend, path: Path) -> Path:
+def _rig_figure(trend: RigTrend) -> str:
     """Values on the first rows, effects from a new row, four panels a row."""
     values = [s for s in trend.series if s.kind == "value"]
     effects = [s for s in trend.series if s.kind == "effect"]
@@ -136,9 +131,7 @@ def _rig_figure(trend: RigTrend, path: Path) -> Path:
         bbox_to_anchor=(0.5, 1.0 - 0.38 / figure.get_figheight()),
     )
     figure.tight_layout(rect=(0.0, 0.0, 1.0, 1.0 - LEGEND_TOP_INCHES / figure.get_figheight()))
-    figure.savefig(path, dpi=DPI)
-    plt.close(figure)
-    return path
+    return png_data_uri(figure, DPI)
 
 
 def _title(axis: Axes, series: Series) -> None:
@@ -146,8 +139,9 @@ def _title(axis: Axes, series: Series) -> None:
         Movement.DRIFT: "drifted",
         Movement.OFFSET: "off the rig file",
         Movement.GREW: "grew",
-        Movement.TOO_FEW: "too few runs",
-        Movement.STEADY: "steady",
+        Movement.OUTSIDE: "outside its band",
+        Movement.TOO_FEW: f"under {TREND_RUNS} runs: no trend test",
+        Movement.STEADY: "no trend",
     }[series.movement]
     colour = FOUND if series.finding is not None else "black"
     axis.set_title(f"{series.words}: {state}", fontsize=9, color=colour)
@@ -167,6 +161,7 @@ def _legend() -> list[Artist]:
         Line2D([], [], ls="", marker="o", ms=4, color="black", label="identified"),
         Line2D([], [], ls="", marker="o", ms=4, mfc="none", color="grey", label="not identified"),
         Line2D([], [], ls="", marker="o", ms=5, color=FOUND, label="effect named"),
+        Line2D([], [], ls="", marker="x", ms=7, color=FOUND, label="far outside its band"),
         Line2D([], [], color=FOUND, lw=1.8, label="trend beyond doubt"),
         Line2D([], [], color=STEADY, lw=1.0, ls="--", label="fitted line, no trend"),
     ]
@@ -180,6 +175,9 @@ def _value_panel(axis: Axes, series: Series) -> None:
     used = series.used
     axis.plot(x[used], series.values[used], "o", ms=3.5, color="black")
     axis.plot(x[~used], series.values[~used], "o", ms=3.5, mfc="none", color="grey")
+    if series.outside:
+        far_mask = np.isin(series.runs, series.outside)
+        axis.plot(x[far_mask], series.values[far_mask], "x", ms=8, mew=2, color=FOUND)
     if not math.isnan(series.slope):
         axis.plot(x[used], series.line(), **_line_style(series))
     axis.set_ylabel("x rig file", fontsize=8)
@@ -257,8 +255,7 @@ def _rig_section(trend: RigTrend, figure: str) -> str:
 <p class=meta>{len(trend.rows)} diagnoses, {_when(first.start_ns)} to {_when(last.start_ns)};
 rig file {html.escape(last.rig_path)} (SHA-256 {last.rig_hash[:12]}...)</p>
 {_findings(trend)}
-<p><img src="{html.escape(figure)}" alt="{html.escape(trend.rig)} over time"
-style="max-width:100%"></p>
+{image(figure, f"{trend.rig} over time")}
 <details open><summary>The runs</summary>{_runs_table(trend)}</details>"""
 
 
@@ -273,25 +270,36 @@ doubt: the trend test (Mann-Kendall, widened for day-to-day correlation) gives p
 {SIGNIFICANCE:g} and the slope's {100 * CONFIDENCE:.0f} % interval excludes 0, and a value
 moved along the line by at least {MIN_CHANGE:.2f} of its tolerance, or an effect grew at
 least {10**MIN_GROWTH:.0f} times and was named in at least {NAMED_SHARE:.0%} of the last
-third of the runs. A value outside its band in at least {OFFSET_SHARE:.0%} of the runs,
-without a trend, says the rig file is off. A series with fewer than {MIN_RUNS} usable runs
-says nothing. On steady synthetic rigs these rules wrote a line for under 1 % of fleets.</p>"""
+third of the runs. A value outside its band in at least {OFFSET_SHARE:.0%} of the runs
+(at least {MIN_RUNS} runs), without a trend, says the rig file is off. Whatever the number
+of runs, a run whose value sits {OUTSIDE_SIGMA:g} or more tolerances from the rig file's is
+said at once (red crosses). The trend test cannot pass on fewer than {TREND_RUNS} runs (a
+perfectly monotone series of {TREND_RUNS - 1} gives p above {SIGNIFICANCE:g}): such a series
+is "too few runs to test a trend", not steady. On steady synthetic rigs of 30 runs these
+rules wrote a line for about 1 % of fleets (the rates: docs/benchmarks.md).</p>"""
 
 
-def _html(trends: Sequence[RigTrend], figures: Sequence[str], database: Path | str | None) -> str:
+def _html(
+    trends: Sequence[RigTrend],
+    figures: Sequence[str],
+    database: Path | str | None,
+    metrics: Sequence[RecordingTrend] = (),
+) -> str:
     when = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
     source = html.escape(str(database)) if database is not None else "not given"
     sections = "\n".join(_rig_section(t, f) for t, f in zip(trends, figures))
+    rules = _rules() if trends else ""
     return f"""<!DOCTYPE html>
 <html><head><meta charset="utf-8"><title>brake_hil: rig health over time</title>
 <style>body{{font-family:sans-serif;max-width:1200px;margin:auto;line-height:1.4}}
 td,th{{border:1px solid #ccc;padding:3px 8px;vertical-align:top}}
 table{{border-collapse:collapse}}ul.findings li{{margin:4px 0;font-weight:bold}}
-.meta{{color:#444}}</style>
+figure{{margin:8px 0}}.meta{{color:#444}}</style>
 </head><body>
 <h1>Rig health over time</h1>
 <p class=meta><b>Results:</b> {source}<br><b>Made:</b> {when} by brake_hil {__version__}</p>
 {sections}
-{_rules()}
+{rules}
+{metrics_sections(metrics)}
 </body></html>
 """

@@ -5,7 +5,14 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-__all__ = ["CalibrationValue", "DiagnosisRow", "FailedRun", "HypothesisRow", "Metrics"]
+__all__ = [
+    "CalibrationValue",
+    "DiagnosisRow",
+    "FailedRun",
+    "HypothesisRow",
+    "MetricsRun",
+    "Metrics",
+]
 
 Metrics = Mapping[str, Mapping[str, Mapping[str, float]]]
 """Model name -> channel -> metric -> value (the paper's Table 4-5 metrics)."""
@@ -66,3 +73,18 @@ class FailedRun:
     tool_version: str
     written_at: str  # ISO 8601, UTC
     error: str  # its one line
+
+
+@dataclass(frozen=True)
+class MetricsRun:
+    """One stored regression or comparison: the recording, the rig file, the metrics."""
+
+    run_id: int
+    kind: str  # regression or comparison
+    recording_path: str
+    recording_hash: str
+    rig_name: str
+    rig_hash: str
+    tool_version: str
+    written_at: str  # ISO 8601, UTC: when it ran (a nightly replays the same recording)
+    metrics: Metrics  # model -> channel -> metric -> value

@@ -57,6 +57,7 @@ from brake_hil.results.rows import (
     FailedRun,
     HypothesisRow,
     Metrics,
+    MetricsRun,
 )
 from brake_hil.results.schema import APPLICATION, KINDS, SCHEMA_VERSION, TABLES, one_line, prepare
 
@@ -70,6 +71,7 @@ __all__ = [
     "FailedRun",
     "HypothesisRow",
     "Metrics",
+    "MetricsRun",
     "ResultsStore",
     "database_path",
     "open_store",
@@ -401,6 +403,32 @@ class ResultsStore:
         ):
             result.setdefault(model, {})[channel] = dict(zip(SUMMARY_KEYS, values))
         return result
+
+    def metrics_runs(self, rig: str | None = None) -> list[MetricsRun]:
+        """The stored regressions and comparisons (status ``ok``), in the order they ran."""
+        query = (
+            "SELECT r.id, r.kind, c.path, c.content_hash, r.rig_name, r.rig_hash, "
+            "r.tool_version, r.written_at FROM runs r "
+            "JOIN recordings c ON c.content_hash = r.recording_hash "
+            "WHERE r.kind IN ('regression', 'comparison') AND r.status = 'ok'"
+            + (" AND r.rig_name = ?" if rig is not None else "")
+            + " ORDER BY r.written_at, r.id"
+        )
+        rows = self._connection.execute(query, (rig,) if rig is not None else ()).fetchall()
+        return [
+            MetricsRun(
+                run_id=int(row[0]),
+                kind=row[1],
+                recording_path=row[2],
+                recording_hash=row[3],
+                rig_name=row[4],
+                rig_hash=row[5],
+                tool_version=row[6],
+                written_at=row[7],
+                metrics=self.metrics(int(row[0])),
+            )
+            for row in rows
+        ]
 
     def failures(self, rig: str | None = None) -> list[FailedRun]:
         """The failed runs (of one rig name, or every rig), in the order they were written."""

@@ -22,15 +22,23 @@ the data show one beyond doubt, one line in plain words:
   significant trend, and the verdict named it in at least :data:`NAMED_SHARE` of the last
   third of the runs: ``seal stick-slip grew over 30 runs (...): seal wear``.
 
+* **outside**: whatever the number of runs, a run whose value sits at least
+  :data:`OUTSIDE_SIGMA` tolerances from the rig file's is said at once: ``run 5: seal
+  stiffness k_eh at 0.12 of the rig file's value, outside its tolerance ±50 % (4.3 times
+  it)``.
+
 Only runs that identify a value (posterior sigma under the calibration's own
-:data:`~brake_hil.diagnosis.physics_checks.IDENTIFIABLE_SHARE` of the prior) count for it;
-with fewer than :data:`MIN_RUNS` the series says nothing ("too few runs to say"). Multipliers
-are relative to the rig file, so only the runs of the rig file's latest version are compared.
+:data:`~brake_hil.diagnosis.physics_checks.IDENTIFIABLE_SHARE` of the prior) count for it.
+The trend test cannot fire on fewer than :data:`TREND_RUNS` runs (a perfectly monotone
+series of fewer stays above :data:`SIGNIFICANCE`): such a series is "too few runs to test a
+trend", never steady; an offset needs :data:`MIN_RUNS`. Multipliers are relative to the rig
+file, so only the runs of the rig file's latest version are compared.
 
 The thresholds were set on synthetic fleets (``test/results/fleets.py``): steady rigs
 (offsets within the band, heavy-tailed and day-to-day correlated scatter up to a third of
 the tolerance, steady effects named or not) got a line in 13 of 2000 fleets of 30 runs
-(0.65 %), while in each of 200 wearing rigs of 40 runs the 12 % fall of caliper stiffness
+(0.65 %; 1.1 % with the *outside* rule, which alone spoke on 0.45 %: docs/benchmarks.md),
+while in each of 200 wearing rigs of 40 runs the 12 % fall of caliper stiffness
 (2 % scatter), the air fraction rising 4 times and the growing seal stick-slip were found.
 With 4 % scatter a 12 % fall is found in 88 % of 40-run fleets, 48 % of 20-run ones.
 """
@@ -61,7 +69,9 @@ __all__ = [
     "MIN_RUNS",
     "NAMED_SHARE",
     "OFFSET_SHARE",
+    "OUTSIDE_SIGMA",
     "SIGNIFICANCE",
+    "TREND_RUNS",
     "Advice",
     "Movement",
     "RigTrend",
@@ -72,7 +82,7 @@ __all__ = [
 ]
 
 MIN_RUNS: Final = 5
-"""Fewest runs (identifying a value, or fitting an effect) a series needs to say anything."""
+"""Fewest runs (identifying a value) an offset from the rig file needs."""
 CONFIDENCE: Final = 0.99
 """Confidence of the Theil-Sen interval of a slope that must exclude 0."""
 SIGNIFICANCE: Final = 0.001
@@ -89,6 +99,10 @@ MIN_GROWTH: Final = math.log10(2.0)
 error twice as much as it did)."""
 NAMED_SHARE: Final = 1.0 / 3.0
 """Share of the last third of the runs whose verdict must name a growing effect."""
+OUTSIDE_SIGMA: Final = 3.0
+"""A run whose value sits this many tolerances (log-sigmas) from the rig file's is said at
+once, whatever the number of runs (the diagnosis report's ``FLAG_SIGMA``: the rig file's value
+is then itself a finding). Its false-alarm rate on steady fleets is in docs/benchmarks.md."""
 
 
 class Advice(NamedTuple):
@@ -149,11 +163,12 @@ entry's ``stands_in_for``, the effects in catalogue order)."""
 class Movement(StrEnum):
     """What a series did."""
 
-    STEADY = "steady"  # within its band, or no trend beyond doubt
+    STEADY = "steady"  # no trend beyond doubt, over enough runs to test one
+    OUTSIDE = "outside"  # a run's value far outside its band, said at once
     DRIFT = "drift"  # a value moved along a significant trend
     OFFSET = "offset"  # a value outside its band throughout, without a drift
     GREW = "grew"  # an effect grew and the verdicts came to name it
-    TOO_FEW = "too_few"  # fewer than MIN_RUNS usable runs
+    TOO_FEW = "too_few"  # fewer than TREND_RUNS usable runs: no trend test
 
 
 @dataclass(frozen=True)
@@ -174,6 +189,7 @@ class Series:
     p_value: float  # Kendall's tau test of the trend (NaN when too few)
     movement: Movement
     finding: str | None  # the line in plain words (drift, offset, grew); None otherwise
+    outside: tuple[int, ...] = ()  # value: runs at least OUTSIDE_SIGMA tolerances off
 
     @property
     def words(self) -> str:
@@ -199,7 +215,7 @@ class RigTrend:
     @property
     def findings(self) -> tuple[str, ...]:
         """The lines in plain words: drifts first, then offsets, then growing effects."""
-        order = {Movement.DRIFT: 0, Movement.GREW: 1, Movement.OFFSET: 2}
+        order = {Movement.OUTSIDE: 0, Movement.DRIFT: 1, Movement.GREW: 2, Movement.OFFSET: 3}
         found = sorted(
             (s for s in self.series if s.finding is not None), key=lambda s: order[s.movement]
         )
@@ -207,21 +223,20 @@ class RigTrend:
 
     @property
     def too_few(self) -> tuple[Series, ...]:
-        """Series with fewer than :data:`MIN_RUNS` usable runs."""
+        """Series with fewer than :data:`TREND_RUNS` usable runs."""
         return tuple(s for s in self.series if s.movement is Movement.TOO_FEW)
 
     def summary(self) -> list[str]:
-        """What to print: the findings, or that nothing left its band; what was not judged."""
+        """What to print: the findings, or what no line means; what was not judged."""
         runs = len(self.rows)
-        if runs < MIN_RUNS:
-            lines = [f"too few runs to say ({runs} diagnoses, {MIN_RUNS} needed)"]
-        elif self.findings:
-            lines = list(self.findings)
-        else:
-            lines = [f"no value or effect left its band over {runs} runs"]
-        if runs >= MIN_RUNS and (few := [s for s in self.too_few if s.kind == "value"]):
+        lines = list(self.findings)
+        if runs < TREND_RUNS:
+            lines.append(f"{_runs(runs)}: too few to test a trend; {TREND_RUNS} needed")
+        elif not lines:
+            lines.append(_nothing_found(self.series, runs))
+        if runs >= TREND_RUNS and (few := [s for s in self.too_few if s.kind == "value"]):
             names = ", ".join(f"{s.words} ({int(s.used.sum())})" for s in few)
-            lines.append(f"identified in too few runs to say: {names}")
+            lines.append(f"identified in too few runs to test a trend: {names}")
         named = [
             s
             for s in self.series
@@ -231,6 +246,28 @@ class RigTrend:
             names = ", ".join(f"{s.words} ({int(s.named.sum())} of {s.named.size})" for s in named)
             lines.append(f"named in most runs, without a trend: {names}")
         return lines + list(self.notes)
+
+
+def _runs(count: int) -> str:
+    return f"{count} run{'' if count == 1 else 's'}"
+
+
+def _nothing_found(series: Sequence[Series], runs: int) -> str:
+    """No line: that nothing left its band, or which values did, within their scatter."""
+    left = []
+    for s in series:
+        if s.kind != "value" or s.band is None:
+            continue
+        shown = s.values[s.used]
+        out = int(((shown < s.band[0]) | (shown > s.band[1])).sum())
+        if out:
+            left.append(f"{s.words} ({out} of {shown.size})")
+    if not left:
+        return f"no value or effect left its band over {runs} runs"
+    return (
+        f"no drift, offset or growth beyond doubt over {runs} runs; outside the band in some "
+        f"runs, without a trend: {', '.join(left)}"
+    )
 
 
 def identified(prior_sigma: float, posterior_sigma: float) -> bool:
@@ -332,6 +369,19 @@ def _trend_p_value(y: FloatArray, residuals: FloatArray) -> float:
     return float(2.0 * stats.norm.sf(z))
 
 
+def _runs_for_a_trend(most: int = 200) -> int:
+    """The fewest runs for which a perfectly monotone series passes the trend test."""
+    for n in range(3, most):
+        x = np.arange(n, dtype=float)
+        if _fit(x, x).significant:
+            return n
+    raise AssertionError("the trend test never passes")  # pragma: no cover
+
+
+TREND_RUNS: Final = _runs_for_a_trend()
+"""Fewest runs the trend test can fire on (8 at p < 0.001): fewer are too few for a trend."""
+
+
 def _no_fit() -> _Fit:
     nan = math.nan
     return _Fit(nan, (nan, nan), nan, nan, False, nan, nan)
@@ -358,11 +408,18 @@ def _value_series(
     multipliers = np.array(values, dtype=float)
     band = (math.exp(-sigma), math.exp(sigma))
     movement, finding, fit = Movement.TOO_FEW, None, _no_fit()
+    stands_in = _stood_in_for(name, rows, named)
+    y = np.log(multipliers[mask])
     if mask.sum() >= MIN_RUNS:
-        x = run_numbers[mask].astype(float)
-        y = np.log(multipliers[mask])
-        fit = _fit(x, y)
-        movement, finding = _judge_value(name, y, sigma, fit, _stood_in_for(name, rows, named))
+        fit = _fit(run_numbers[mask].astype(float), y) if mask.sum() >= TREND_RUNS else fit
+        movement, finding = _judge_value(name, y, sigma, fit, stands_in)
+        if movement is Movement.STEADY and mask.sum() < TREND_RUNS:
+            movement = Movement.TOO_FEW
+    outside = tuple(int(r) for r in run_numbers[mask][np.abs(y) >= OUTSIDE_SIGMA * sigma])
+    if outside and movement in (Movement.STEADY, Movement.TOO_FEW):
+        movement = Movement.OUTSIDE
+        last = float(multipliers[run_numbers == outside[-1]][0])
+        finding = _outside(name, outside, last, sigma, stands_in)
     return Series(
         name=name,
         kind="value",
@@ -378,6 +435,26 @@ def _value_series(
         p_value=fit.p_value,
         movement=movement,
         finding=finding,
+        outside=outside,
+    )
+
+
+def _outside(
+    name: str, runs: Sequence[int], multiplier: float, sigma: float, stands_in: str | None
+) -> str:
+    """``run 5: seal stiffness at 0.12 of the rig file's value, outside ... : cause``."""
+    advice = _advice(name)
+    times = abs(math.log(multiplier)) / sigma
+    also = ""
+    if len(runs) > 1:
+        earlier = ", ".join(str(r + 1) for r in runs[:-1])
+        also = f"; also in run{'s' if len(runs) > 2 else ''} {earlier}"
+    if stands_in is not None:
+        also += f"; the LTI model also stands in with it for the {stands_in}"
+    return (
+        f"run {runs[-1] + 1}: {advice.words} at {multiplier:.2g} of the rig file's value, "
+        f"outside its tolerance ±{100 * sigma:.0f} % ({times:.1f} times it{also}): "
+        f"{advice.cause}"
     )
 
 
@@ -461,7 +538,7 @@ def _effect_series(name: str, rows: Sequence[DiagnosisRow]) -> Series:
     named_mask = np.array(named, dtype=bool)
     used = np.ones(values.shape, dtype=bool)
     movement, finding, fit = Movement.TOO_FEW, None, _no_fit()
-    if values.size >= MIN_RUNS:
+    if values.size >= TREND_RUNS:
         fit = _fit(run_numbers.astype(float), values)
         movement, finding = _judge_effect(name, values, named_mask, fit)
     return Series(

@@ -131,7 +131,8 @@ class DeadlineLoop:
     Args:
         tick: the work of one tick; it gets the :class:`Tick`.
         period_ns: grid period (ns).
-        spin_ns: how long before a deadline sleeping stops and spinning starts (ns).
+        spin_ns: how long before a deadline sleeping stops and spinning starts (ns); only
+            under ``SCHED_FIFO``: a thread at normal priority sleeps to each deadline.
         statistics: where ``period_error``, ``tick_work``, ticks, late ticks, overruns and
             skipped slots are counted.
         realtime_priority: ``SCHED_FIFO`` priority of the thread (0: normal scheduling).
@@ -267,6 +268,11 @@ class DeadlineLoop:
     def _run(self) -> None:
         self.timer_slack = set_timer_slack(1)
         self.realtime = set_realtime_priority(self._priority)
+        if not self.realtime:
+            # At normal priority a spin buys no timing (the kernel preempts the spinner for
+            # whatever else is runnable) and costs the CPU the threads feeding the loop need:
+            # on a busy 2-core machine the spinning model lagged its input by seconds.
+            self.spin_ns = 0
         try:
             while not self._released.wait(HELD_POLL_S):
                 if self._while_held is not None:

@@ -1,18 +1,19 @@
 """The DDS middleware's environment, for every path that starts a ROS node (ROS-free).
 
-* :func:`loopback_environment`: local-only runs keep DDS on loopback. When
-  ``ROS_AUTOMATIC_DISCOVERY_RANGE`` is ``LOCALHOST`` (the project's default, which every node
-  keeps) and the user has set no Fast DDS profile of their own, it points
-  ``FASTDDS_DEFAULT_PROFILES_FILE`` at ``config/fastdds_loopback.xml`` (UDPv4 allowed on
-  127.0.0.1 only, builtin transports off, discovery by unicast to 127.0.0.1, no multicast).
-  rmw_fastrtps's ``LOCALHOST`` mode (Kilted) adds transports of its own beside the profile's
-  (a shared-memory one and a UDPv4 one with no interface allowlist, built in its code where no
-  profile or environment variable reaches): that UDPv4 transport opens send sockets on the
-  wildcard address and on each external interface's address, which send to the loopback peers
-  only (discovery is unicast to 127.0.0.1, no multicast). A profile alone would need the range
-  ``SYSTEM_DEFAULT``, which this project's rule (every node runs with ``LOCALHOST``) excludes.
-  ``BRAKE_HIL_DDS_PROFILE=off`` (or ``SUBNET``, or a profile of one's
-  own) leaves the profile out.
+* :func:`loopback_environment`: local-only runs keep every DDS socket on loopback. When
+  ``ROS_AUTOMATIC_DISCOVERY_RANGE`` is ``LOCALHOST`` (the default: local only), the middleware
+  is Fast DDS and the user has set no Fast DDS profile of their own, it points
+  ``FASTDDS_DEFAULT_PROFILES_FILE`` at ``config/fastdds_loopback.xml`` (a shared-memory
+  transport and one UDPv4 transport allowed on 127.0.0.1 only, builtin transports off,
+  discovery by unicast to 127.0.0.1, no multicast) and sets the range to ``SYSTEM_DEFAULT``:
+  rmw_fastrtps's ``LOCALHOST`` mode adds an UDPv4 transport of its own with no interface
+  allowlist beside the profile's (its send sockets bind the wildcard and each interface's
+  address), in code no profile reaches; under ``SYSTEM_DEFAULT`` the profile alone is in force
+  and every socket is on 127.0.0.1. ``BRAKE_HIL_DDS_PROFILE=loopback`` records that the range
+  was switched because the profile is loaded, so a child process inherits a consistent
+  environment and treats it as local-only. Without the profile (``BRAKE_HIL_DDS_PROFILE=off``,
+  a profile of one's own, another middleware) the range stays ``LOCALHOST``: never
+  ``SYSTEM_DEFAULT`` without the profile. ``SUBNET`` leaves the profile out.
 * :func:`security_problem`: ``ROS_SECURITY_ENABLE=true`` with a Fast DDS built without its
   security plugins (PyPI's) is one line and exit 2 in every node, rather than a traceback or
   a silently insecure run.
@@ -51,24 +52,44 @@ def _uses_fast_dds(env: MutableMapping[str, str]) -> bool:
     return env.get("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp").startswith("rmw_fastrtps")
 
 
+def _drop_profile(env: MutableMapping[str, str], profile: Path) -> None:
+    """Undo an inherited loopback profile no longer in force: never SYSTEM_DEFAULT without it."""
+    ours = env.get("BRAKE_HIL_DDS_PROFILE") == "loopback"
+    if ours:
+        del env["BRAKE_HIL_DDS_PROFILE"]
+    for name in _PROFILE_VARIABLES:
+        if env.get(name) and Path(env[name]) == profile:
+            del env[name]
+            ours = True
+    if ours and env.get("ROS_AUTOMATIC_DISCOVERY_RANGE") == "SYSTEM_DEFAULT":
+        env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+
+
 def loopback_environment(env: MutableMapping[str, str]) -> bool:
-    """Make ``env`` (``os.environ`` or a child's) local-only on loopback; True if changed.
+    """Make ``env`` (``os.environ`` or a child's) local-only on loopback; True: profile in force.
 
     ``ROS_AUTOMATIC_DISCOVERY_RANGE`` defaults to ``LOCALHOST``; see the module docstring for
-    what is set then. Idempotent: a child of a process it ran in inherits the result.
+    what is set then. Idempotent: a child of a process it ran in inherits the result
+    (``BRAKE_HIL_DDS_PROFILE=loopback`` with ``SYSTEM_DEFAULT`` and the profile).
     """
     discovery = env.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     profile = loopback_profile_path()
+    marked = env.get("BRAKE_HIL_DDS_PROFILE", "") == "loopback"
+    local = discovery == "LOCALHOST" or (marked and discovery == "SYSTEM_DEFAULT")
+    off = env.get("BRAKE_HIL_DDS_PROFILE", "") == "off"
     own = [env[name] for name in _PROFILE_VARIABLES if env.get(name)]
     if (
-        discovery != "LOCALHOST"
-        or env.get("BRAKE_HIL_DDS_PROFILE", "") == "off"
+        not local
+        or off
         or any(Path(path) != profile for path in own)  # the user's own profile
         or not _uses_fast_dds(env)
         or not profile.is_file()
     ):
+        if marked or off:
+            _drop_profile(env, profile)
         return False
     env["FASTDDS_DEFAULT_PROFILES_FILE"] = str(profile)
+    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "SYSTEM_DEFAULT"  # the profile alone: loopback only
     env["BRAKE_HIL_DDS_PROFILE"] = "loopback"
     return True
 

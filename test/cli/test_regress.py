@@ -139,3 +139,81 @@ def test_regress_and_compare_append_to_the_results_database_once_per_recording(
     unwritable = regress(BAG, "--baseline", shipped, "--db", "/proc/x.db")
     assert unwritable.returncode == 2 and unwritable.stderr.count("\n") == 1, unwritable.stderr
     assert "/proc/x.db" in unwritable.stderr and "Traceback" not in unwritable.stderr
+
+
+def _model_files(baseline: Path) -> dict[str, str]:
+    return {
+        key: bag["model_file"] for key, bag in json.loads(baseline.read_text())["bags"].items()
+    }
+
+
+def test_every_bag_folder_replayed_through_its_own_rig_and_far_off_flagged(
+    tmp_path: Path,
+) -> None:
+    bags = PROJECT / "bags"
+    folders = sorted(path for path in bags.iterdir() if path.is_dir())
+    assert bags / "truth" in folders  # rig files only: skipped, never the end of the run
+    baseline = tmp_path / "new" / "base.json"  # a new file in a new folder
+    created = regress(*folders, "--baseline", baseline, "--update")
+    # Written, exit 0, one warning: one_washer_restricted is itself far off its own rig's LTI
+    # model (its seals stick and slip; F_k ptp about 130 %, past the comparator's ERROR level).
+    assert created.returncode == 0, created.stdout + created.stderr
+    assert baseline.is_file()
+    warned = [line for line in created.stdout.splitlines() if line.startswith("WARNING: ")]
+    assert len(warned) == 1 and "one_washer_restricted is itself far off: F_k ptp" in warned[0]
+    skipped = [line for line in created.stderr.splitlines() if "skipped" in line]
+    assert skipped == [
+        f"brake-hil regress: {bags / 'truth'}: no recording in this folder: skipped"
+    ]
+    assert "ramp_one_washer: skipped, no steady 5 Hz pulsing to score" in created.stdout
+    assert "sweep_one_washer: skipped, no steady 5 Hz pulsing to score" in created.stdout
+    models = _model_files(baseline)
+    assert len(models) == 10
+    for key, model in models.items():
+        assert model == f"{key}.rig.yaml"  # each bag's own rig file, beside it
+        assert f"replayed through {model} (beside the recording)" in created.stdout
+    again = regress(*folders, "--baseline", baseline)
+    assert again.returncode == 0, again.stdout + again.stderr
+    assert "every metric within its tolerance" in again.stdout
+    assert "note: baseline for one_washer_restricted is itself far off" in again.stdout.replace(
+        f"{bags}/", ""
+    )
+    stored = {Path(k).name: v for k, v in json.loads(baseline.read_text())["bags"].items()}
+    # through the open-valve rig these read 180.8 % and 183.2 %; through their own, within
+    # the comparator's ERROR level (25 %) of 100 % or just past it
+    assert abs(stored["five_washer_restricted"]["metrics"]["F_k"]["ptp_ratio_pct"] - 100) < 25
+    assert abs(stored["one_washer_restricted"]["metrics"]["F_k"]["ptp_ratio_pct"] - 100) < 35
+
+
+def test_a_baseline_through_the_wrong_rig_is_written_and_flagged(tmp_path: Path) -> None:
+    restricted = PROJECT / "bags" / "one_washer_restricted"
+    baseline = tmp_path / "base.json"
+    done = regress(
+        restricted, "--baseline", baseline, "--update", "--model", CONFIG / "rig_default.yaml"
+    )
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert baseline.is_file()
+    assert "WARNING: " in done.stderr and "one_washer_restricted is itself far off" in done.stderr
+    assert "is itself far off: p_b ptp 148.2 %, F_k ptp 180.8 %, x_c ptp 156.9 %" in done.stdout
+    assert f"the model {CONFIG / 'rig_default.yaml'} does not match this recording" in done.stdout
+    document = json.loads(baseline.read_text())
+    assert document["model_file"] == (CONFIG / "rig_default.yaml").as_posix()
+
+
+def test_a_recording_without_its_rig_file_is_skipped_or_alone_refused(tmp_path: Path) -> None:
+    shutil.copytree(BAG, tmp_path / "bare")
+    shutil.copytree(BAG, tmp_path / "rigged")
+    shutil.copy(RIG, tmp_path / "rigged.rig.yaml")
+    baseline = tmp_path / "base.json"
+    done = regress(tmp_path / "bare", tmp_path / "rigged", "--baseline", baseline, "--update")
+    assert done.returncode == 0, done.stdout + done.stderr
+    lines = [line for line in done.stderr.splitlines() if "skipped" in line]
+    assert len(lines) == 1 and str(tmp_path / "bare") in lines[0]
+    assert "no rig file beside it" in lines[0] and "pass --model" in lines[0]
+    assert _model_files(baseline) == {"rigged": "rigged.rig.yaml"}
+    alone = regress(tmp_path / "bare", "--baseline", tmp_path / "other.json", "--update")
+    assert alone.returncode == 2 and alone.stderr.count("\n") == 1, alone.stderr
+    assert "no recording to replay" in alone.stderr and "no rig file beside it" in alone.stderr
+    assert not (tmp_path / "other.json").exists()
+    lost = regress(tmp_path / "bare", tmp_path / "rigged", "--baseline", baseline)
+    assert lost.returncode == 0, lost.stdout + lost.stderr  # not in the baseline: not lost

@@ -1,7 +1,8 @@
 """Helpers of the node tests: a ROS environment per run and a collecting rclpy node.
 
 Every node runs as its own process (``python -m brake_hil.nodes.<name>``) with
-``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` and a ``ROS_DOMAIN_ID`` unique to the test run,
+DDS local-only (the loopback profile under ``SYSTEM_DEFAULT``, see
+:func:`brake_hil.runtime.loopback_environment`) and a ``ROS_DOMAIN_ID`` unique to the test run,
 set both in the subprocesses' environment and in this process (for the collector node).
 """
 

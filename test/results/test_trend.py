@@ -12,13 +12,17 @@ from brake_hil.diagnosis.calibration import BORE_COMPLIANCE, UNCERTAIN
 from brake_hil.physics.catalogue import CATALOGUE
 from brake_hil.results.trend import (
     ADVICE,
-    MIN_RUNS,
+    OUTSIDE_SIGMA,
+    SIGNIFICANCE,
+    TREND_RUNS,
     Movement,
+    _fit,
+    _trend_p_value,
     identified,
     rig_trend,
     trends,
 )
-from test.results.fleets import real_document, rows, steady_fleet, wearing_fleet
+from test.results.fleets import Run, real_document, rows, steady_fleet, wearing_fleet
 
 
 def test_a_steady_rig_gets_no_line_in_at_least_99_percent_of_fleets() -> None:
@@ -95,11 +99,101 @@ def test_an_offset_standing_in_for_a_named_effect_is_no_rig_file_error() -> None
     )
 
 
-def test_with_too_few_runs_nothing_is_said() -> None:
-    trend = rig_trend(rows(wearing_fleet(_rng(1), MIN_RUNS - 1)))
+def test_with_too_few_runs_for_a_trend_it_says_so_and_no_trend() -> None:
+    trend = rig_trend(rows(wearing_fleet(_rng(1), 4)))
     assert trend.findings == ()
     assert all(s.movement is Movement.TOO_FEW for s in trend.series)
-    assert trend.summary()[0] == f"too few runs to say ({MIN_RUNS - 1} diagnoses, 5 needed)"
+    assert trend.summary()[0] == "4 runs: too few to test a trend; 8 needed"
+
+
+def test_trend_runs_is_the_fewest_a_perfectly_monotone_series_passes_the_test() -> None:
+    # The rule's own arithmetic: 7 monotone runs give p about 0.003, 8 give under 0.001.
+    assert TREND_RUNS == 8
+    for n, passes in ((TREND_RUNS - 1, False), (TREND_RUNS, True)):
+        x = np.arange(n, dtype=float)
+        assert (_trend_p_value(x, 0 * x) < SIGNIFICANCE) is passes
+        assert _fit(x, -x).significant is passes
+
+
+def _k_eh_lab(runs: int) -> tuple[list[Run], list[Run]]:
+    """``brake-hil fleet``'s two rigs as the diagnoses saw them: rig-1's seal k_eh falls from
+    0.84 to 0.12 of the rig file's (tolerance ±50 %); rig-2's sits at 0.59 in every run (the
+    LTI model's stand-in for the stick-slip it names), the rest steady."""
+    wearing, steady = steady_fleet(_rng(runs), runs), steady_fleet(_rng(runs + 1), runs)
+    for number, (worn, kept) in enumerate(zip(wearing, steady)):
+        fall = 0.843 - (0.843 - 0.117) * number / (runs - 1)
+        worn.logs["effective_hydraulic_stiffness"] = math.log(fall)
+        kept.logs["effective_hydraulic_stiffness"] = math.log(0.59) + 0.03 * (-1) ** number
+        for run in (worn, kept):
+            run.identified["effective_hydraulic_stiffness"] = True
+            run.named = ["seal_stick_slip"]
+    return wearing, steady
+
+
+@pytest.mark.parametrize("runs", [5, 10, 30])
+def test_the_wearing_rig_of_a_lab_is_flagged_at_once_and_the_steady_one_not(runs: int) -> None:
+    wearing, steady = _k_eh_lab(runs)
+    worn = rig_trend(rows(wearing, "rig-1"))
+    lines = worn.summary()
+    seal = next(s for s in worn.series if s.name == "effective_hydraulic_stiffness")
+    assert seal.finding is not None and seal.finding in lines
+    if runs < TREND_RUNS:  # no trend test: the run outside its band, said at once
+        assert seal.movement is Movement.OUTSIDE
+        assert seal.finding.startswith(
+            f"run {runs}: seal stiffness k_eh at 0.12 of the rig file's value, outside its "
+            "tolerance ±50 % (4.3 times it"
+        )
+        assert f"{runs} runs: too few to test a trend; 8 needed" in lines
+    elif runs < 30:  # a curved fall on 10 runs: a run outside its band, or a drift
+        assert seal.movement in (Movement.OUTSIDE, Movement.DRIFT)
+    else:  # 30 runs: the fall is a drift, now below the band
+        assert seal.movement is Movement.DRIFT and "now below it" in seal.finding
+    assert not any("left its band" in line for line in lines)
+    kept = rig_trend(rows(steady, "rig-2"))
+    assert not any("outside its tolerance" in line for line in kept.summary())
+    assert all(s.movement is not Movement.OUTSIDE for s in kept.series)
+
+
+def test_a_run_far_outside_its_band_is_flagged_whatever_the_runs_around_it() -> None:
+    fleet = steady_fleet(_rng(21), 20)
+    for run in fleet:
+        run.logs["caliper_stiffness"] = 0.0
+        run.identified["caliper_stiffness"] = True
+    fleet[6].logs["caliper_stiffness"] = -OUTSIDE_SIGMA * 0.25 * 1.1  # one bad day
+    trend = rig_trend(rows(fleet))
+    caliper = next(s for s in trend.series if s.name == "caliper_stiffness")
+    assert caliper.movement is Movement.OUTSIDE and caliper.outside == (6,)
+    assert caliper.finding is not None and caliper.finding.startswith(
+        "run 7: caliper stiffness at 0.44 of the rig file's value, outside its tolerance ±25 %"
+    )
+
+
+def test_no_line_never_says_nothing_left_its_band_when_a_value_did() -> None:
+    fleet = steady_fleet(_rng(22), 12)
+    for run in fleet:
+        run.logs = dict.fromkeys(run.logs, 0.0)
+        run.identified = dict.fromkeys(run.identified, True)
+        run.strengths = dict.fromkeys(run.strengths, 0.0)
+    fleet[3].logs["valve_resistance"] = 1.5 * 0.4  # outside its band once, within 3 of it
+    trend = rig_trend([replace(r, effects=()) for r in rows(fleet)])
+    assert trend.findings == ()
+    assert trend.summary() == [
+        "no drift, offset or growth beyond doubt over 12 runs; outside the band in some "
+        "runs, without a trend: needle-valve resistance (1 of 12)"
+    ]
+
+
+def test_the_outside_rule_rarely_fires_on_steady_fleets() -> None:
+    # docs/benchmarks.md has the measured rate (200 steady fleets of 30 runs).
+    alarms = [
+        seed
+        for seed in range(200)
+        if any(
+            s.movement is Movement.OUTSIDE
+            for s in rig_trend(rows(steady_fleet(_rng(seed)))).series
+        )
+    ]
+    assert len(alarms) <= 6, alarms
 
 
 def test_a_value_the_runs_do_not_identify_is_not_trended() -> None:
@@ -110,7 +204,8 @@ def test_a_value_the_runs_do_not_identify_is_not_trended() -> None:
     caliper = next(s for s in trend.series if s.name == "caliper_stiffness")
     assert caliper.movement is Movement.TOO_FEW and caliper.finding is None
     assert any(
-        line.startswith("identified in too few runs to say: caliper") for line in trend.summary()
+        line.startswith("identified in too few runs to test a trend: caliper")
+        for line in trend.summary()
     )
 
 

@@ -161,6 +161,30 @@ def test_the_loop_thread_stops_and_keeps_an_error_of_its_tick() -> None:
     assert isinstance(loop.error, RuntimeError) and errors == [loop.error]
 
 
+@pytest.mark.parametrize("fifo", [False, True])
+def test_the_loop_spins_before_its_deadlines_only_under_sched_fifo(
+    fifo: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # At normal priority a spin buys no timing and takes the CPU the loop's feeders need.
+    from brake_hil.runtime import deadline_loop
+
+    monkeypatch.setattr(deadline_loop, "set_realtime_priority", lambda priority: fifo)
+    idle_turns: list[int] = []
+    ticks: list[int] = []
+    loop = DeadlineLoop(
+        lambda t: ticks.append(t.slot), 1 * MS, 500_000, idle=lambda: idle_turns.append(1)
+    )
+    loop.start()
+    for _ in range(500):
+        if len(ticks) >= 20:
+            break
+        time.sleep(0.01)
+    loop.stop()
+    assert len(ticks) >= 20 and loop.realtime is fifo
+    assert loop.spin_ns == (500_000 if fifo else 0)
+    assert (len(idle_turns) > 0) is fifo
+
+
 def test_a_held_loop_ticks_only_when_driven_counts_alike_and_takes_over_on_release() -> None:
     ticks: list[Tick] = []
     loop = DeadlineLoop(ticks.append, 1 * MS, 100_000)

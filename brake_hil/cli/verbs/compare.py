@@ -4,8 +4,29 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+import sys
 
 from brake_hil.cli.verb import RECORDING_HELP, Verb, add_database_argument, json_written
+
+RIG_HELP = "the rig file (YAML; default: RECORDING.rig.yaml beside the recording)"
+
+
+def _rig(args: argparse.Namespace) -> Path:
+    """``--rig``, else the rig file beside the recording, said on stderr (as ``diagnose`` does).
+
+    Raises:
+        RecordingError: no such recording.
+        BrakeHilError: no rig file beside it (the message says to pass ``--rig``).
+    """
+    from brake_hil.io.recording_paths import existing_recording, rig_beside
+
+    existing_recording(args.recording)
+    if args.rig is not None:
+        return Path(args.rig)
+    rig = rig_beside(args.recording)
+    print(f"rig file: {rig} (beside the recording; --rig to choose another)", file=sys.stderr)
+    return rig
+
 
 __all__ = ["CharacterizeVerb", "CompareVerb"]
 
@@ -17,9 +38,9 @@ class CompareVerb(Verb):
     help = "run the rig's LTI model on a recording"
 
     def add_arguments(self, parser: argparse.ArgumentParser) -> None:
-        """``RECORDING --rig RIG [--json F] [--plot F] [--db URL]``."""
+        """``RECORDING [--rig RIG] [--json F] [--plot F] [--db URL]``."""
         parser.add_argument("recording", type=Path, help=RECORDING_HELP)
-        parser.add_argument("--rig", type=Path, required=True, help="the rig file (YAML) to model")
+        parser.add_argument("--rig", type=Path, help=RIG_HELP)
         parser.add_argument("--json", type=Path, help="also write the metrics here as JSON")
         parser.add_argument("--plot", type=Path, help="PNG of measured vs predicted")
         add_database_argument(parser, "default: none")
@@ -27,11 +48,15 @@ class CompareVerb(Verb):
     def main(self, args: argparse.Namespace) -> int:
         """The metrics table; the plot, JSON and database row when asked for."""
         from brake_hil.app.compare import run_compare
-        from brake_hil.app.results_db import check_database
+        from brake_hil.app.output import removed_if_refused
+        from brake_hil.app.results_db import check_database, database_folder
 
-        check_database(args.db)
-        result = run_compare(args.recording, args.rig, args.json, args.plot)
-        print(f"recording {args.recording}  rig {args.rig} ({result.rig.name})")
+        rig = _rig(args)
+        with removed_if_refused(database_folder(args.db)):
+            result = run_compare(
+                args.recording, rig, args.json, args.plot, lambda: check_database(args.db)
+            )
+        print(f"recording {args.recording}  rig {rig} ({result.rig.name})")
         for segment in result.comparison.segments:
             print(
                 f"segment {segment.t_start:6.2f}-{segment.t_end:6.2f} s, "
@@ -50,7 +75,7 @@ class CompareVerb(Verb):
             from brake_hil.app.results_db import append_comparison
 
             metrics = result.comparison.metrics()
-            stored = append_comparison(args.recording, args.rig, metrics, args.db)
+            stored = append_comparison(args.recording, rig, metrics, args.db)
             print(f"results appended to {stored}")
         return 0
 
@@ -62,21 +87,22 @@ class CharacterizeVerb(Verb):
     help = "the seal's stiffness and damping per segment (Table 3 of Liette, Dreyer, Singh 2012)"
 
     def add_arguments(self, parser: argparse.ArgumentParser) -> None:
-        """``RECORDING --rig RIG [--json F]``."""
+        """``RECORDING [--rig RIG] [--json F]``."""
         parser.add_argument("recording", type=Path, help=RECORDING_HELP)
-        parser.add_argument("--rig", type=Path, required=True, help="the rig file (YAML)")
+        parser.add_argument("--rig", type=Path, help=RIG_HELP)
         parser.add_argument("--json", type=Path, help="also write the table here as JSON")
 
     def main(self, args: argparse.Namespace) -> int:
         """One row per steady segment; the JSON when asked for."""
         from brake_hil.app.characterize import run_characterize
 
-        result = run_characterize(args.recording, args.rig, args.json)
+        rig = _rig(args)
+        result = run_characterize(args.recording, rig, args.json)
         header = (
             f"{'segment s':>13s}{'max p MPa':>10s}{'k_eh*':>7s}{'eta_eh':>7s}"
             f"{'2c_fs*':>7s}{'2c_ss*':>7s}{'2c_fb*':>7s}{'xi':>6s}  slips"
         )
-        print(f"recording {args.recording}  rig {args.rig} ({result.rig.name})")
+        print(f"recording {args.recording}  rig {rig} ({result.rig.name})")
         print(header)
         for s in result.segments:
             print(

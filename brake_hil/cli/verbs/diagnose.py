@@ -78,20 +78,28 @@ def diagnose_one(args: argparse.Namespace) -> int:
     ``results.sqlite`` in ``--out`` (default: in ``out/``).
     """
     from brake_hil.app.diagnose import DIAGNOSIS_STEPS, run_diagnose
-    from brake_hil.app.results_db import DATABASE_NAME, append_diagnosis, check_database
-    from brake_hil.files import check_output_folder
+    from brake_hil.app.output import removed_if_refused
+    from brake_hil.app.results_db import (
+        DATABASE_NAME,
+        append_diagnosis,
+        check_database,
+        database_folder,
+    )
+    from brake_hil.io.recording_paths import existing_recording
 
+    existing_recording(args.recording)  # a typo named as such, before its rig file is sought
     rig = args.rig if args.rig is not None else rig_beside(args.recording)
     out = args.out if args.out is not None else Path("out") / recording_name(args.recording)
     database = args.db or (args.out or Path("out")) / DATABASE_NAME
-    check_output_folder(out)  # before the database in it: the folder's own problem named
-    check_database(database)
     if args.rig is None:
         print(f"rig file: {rig} (beside the recording; --rig to choose another)")
     if args.out is None:
         print(f"output folder: {out} (--out to choose another)")
     sys.stdout.flush()
     with ExitStack() as stack:
+        # the output folder and the database once the inputs are opened: a refusal writes
+        # nothing (the folder checked before the database in it: its own problem named)
+        stack.enter_context(removed_if_refused(out, database_folder(database)))
         bars: list[tqdm] = []  # type: ignore[type-arg]  # made at the first step: bad input
         # before it leaves the one error line alone on stderr
 
@@ -107,7 +115,7 @@ def diagnose_one(args: argparse.Namespace) -> int:
             bar.set_postfix_str(message, refresh=False)
             bar.update(1)
 
-        result = run_diagnose(args.recording, rig, out, progress)
+        result = run_diagnose(args.recording, rig, out, progress, lambda: check_database(database))
         if bars:
             bars[0].n = bars[0].total
             bars[0].set_postfix_str("done")

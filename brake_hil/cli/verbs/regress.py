@@ -3,26 +3,32 @@
 from __future__ import annotations
 
 import argparse
+from contextlib import ExitStack
 from pathlib import Path
+import sys
 from typing import TYPE_CHECKING
 
-from brake_hil.cli.progress import fleet_bar
+from brake_hil.cli.progress import FleetBar, fleet_bar
 from brake_hil.cli.verb import Verb, add_database_argument
 from brake_hil.cli.workers import add_workers_arguments, workers_from_args
 
 if TYPE_CHECKING:
     from brake_hil.app.parallel import Outcome
-    from brake_hil.app.regress import MetricCheck, Regression, ReplayResult
+    from brake_hil.app.regress import MetricCheck, Plan, Regression, ReplayResult
 
 __all__ = ["RegressVerb", "format_checks"]
 
 
 class RegressVerb(Verb):
-    """0 when nothing moved (or the baseline was written), else 1.
+    """0 when nothing moved (or a baseline that is not far off was written), else 1.
 
-    A bar of recordings replayed (one without steady pulsing counts as done: it is skipped
-    with a note, not failed), from before the baseline and model are read: their refusal
-    comes sooner than the bar's first draw.
+    Each recording is replayed through ``--model``, else the baseline's model file when it
+    names one, else its own rig file (``RECORDING.rig.yaml`` beside it). A path that holds no
+    recording, or a recording with no rig file, is skipped with one line on stderr (exit 2
+    when nothing is left to replay). A bar of recordings replayed (one without steady pulsing
+    counts as done: it is skipped with a note, not failed), drawn once the inputs are checked.
+    A baseline written far off (a ptp ratio more than 25 % from 100 %) is written, flagged
+    and exits 1.
     """
 
     name = "regress"
@@ -34,11 +40,19 @@ class RegressVerb(Verb):
             "recordings",
             type=Path,
             nargs="+",
-            help="recordings to replay; one without steady 5 Hz pulsing is skipped with a note",
+            help="recordings (or folders of them) to replay; a path with no recording, or "
+            "one without steady 5 Hz pulsing, is skipped with a note",
         )
         parser.add_argument("--baseline", type=Path, required=True, help="baseline JSON")
-        parser.add_argument("--model", type=Path, help="model file (default: the baseline's)")
-        parser.add_argument("--update", action="store_true", help="rewrite the baseline")
+        parser.add_argument(
+            "--model",
+            type=Path,
+            help="one model file for every recording (default: the baseline's when it names "
+            "one, else RECORDING.rig.yaml beside each recording)",
+        )
+        parser.add_argument(
+            "--update", action="store_true", help="write (or rewrite) the baseline"
+        )
         add_database_argument(parser, "default: none")
         add_workers_arguments(parser)
 
@@ -49,30 +63,48 @@ class RegressVerb(Verb):
         from brake_hil.errors import NoSteadyPulsingError
 
         workers = workers_from_args(args)
-        check_database(args.db)
-        with fleet_bar(len(args.recordings), "regress") as bar:
+        with ExitStack() as stack:
+            bars: list[FleetBar] = []
+
+            def start(plan: Plan) -> None:
+                for reason in plan.refused.values():
+                    print(f"brake-hil regress: {reason}: skipped", file=sys.stderr)
+                check_database(args.db)  # once the inputs are checked: a refusal writes nothing
+                bars.append(stack.enter_context(fleet_bar(len(plan.jobs), "regress")))
 
             def progress(outcome: Outcome[ReplayResult]) -> None:
-                bar.finished(outcome.ok or isinstance(outcome.error, NoSteadyPulsingError))
+                bars[0].finished(outcome.ok or isinstance(outcome.error, NoSteadyPulsingError))
 
             result = run_regression(
-                args.recordings, args.baseline, args.model, args.update, workers, progress
+                args.recordings,
+                args.baseline,
+                args.model,
+                args.update,
+                workers,
+                progress,
+                start=start,
             )
         _print_replays(result)
         if args.db and result.results:
             from brake_hil.app.results_db import append_regression
 
-            replays = {Path(r.recording): r.metrics for r in result.results.values()}
-            print(f"results appended to {append_regression(replays, result.model_file, args.db)}")
+            by_model: dict[Path, dict[Path, dict[str, dict[str, float]]]] = {}
+            for replay in result.results.values():
+                model = Path(replay.model_file)
+                by_model.setdefault(model, {})[Path(replay.recording)] = replay.metrics
+            for model, replays in by_model.items():
+                stored = append_regression(replays, model, args.db)
+            print(f"results appended to {stored}")
         return _status(result)
 
 
 def _print_replays(result: Regression) -> None:
     """Each replay, the totals, each recording skipped, and the checks' table."""
     for key, replay in result.results.items():
+        source = result.sources.get(key, "")
         print(
             f"{key}: {replay.samples} samples ({replay.duration_s:.1f} s) replayed through "
-            f"{result.model_file} at {replay.replay_factor:.0f}x real time, "
+            f"{replay.model_file} ({source}) at {replay.replay_factor:.0f}x real time, "
             f"{len(replay.segments)} steady segments scored"
         )
     print(
@@ -87,11 +119,41 @@ def _print_replays(result: Regression) -> None:
             print(line)
 
 
+def _far_off_lines(result: Regression) -> list[str]:
+    """One line per far-off baseline: which channels, and which model file."""
+    from brake_hil.app.regress import FAR_OFF_PTP_PCT
+
+    lines = []
+    for key, channels in result.far_off.items():
+        model = result.results[key].model_file
+        lines.append(
+            f"baseline for {key} is itself far off: {', '.join(channels)} (more than "
+            f"{FAR_OFF_PTP_PCT:g} % from 100 %): the model {model} does not match this recording"
+        )
+    return lines
+
+
 def _status(result: Regression) -> int:
-    """Say how the regression ended; 0 when the baseline was written or nothing moved."""
+    """Say how the regression ended.
+
+    0 when nothing moved or the baseline was written (a far-off recording in it is flagged
+    with a ``WARNING:`` line on stdout and stderr); 1 when a metric moved or a bag of the
+    baseline was lost.
+    """
+    far = _far_off_lines(result)
     if result.updated:
         print(f"baseline written to {result.baseline_path}")
+        for line in far:
+            print(f"WARNING: {line}")
+            print(f"brake-hil regress: WARNING: {line}", file=sys.stderr)
+        if far:
+            print(
+                f"{len(far)} of its {len(result.results)} recordings are far off: check each "
+                "one's rig file (or --model), or diagnose the recording"
+            )
         return 0
+    for line in far:
+        print(f"note: {line}; within tolerance of it means unchanged, not right")
     if result.moved:
         print(f"{len(result.moved)} metrics moved past their tolerance or have no baseline")
     if result.lost:

@@ -14,15 +14,17 @@ class TrendVerb(Verb):
     """Per rig, one line per finding, then where the page is."""
 
     name = "trend"
-    help = "each rig's calibrated values and effects across its stored diagnoses"
+    help = "each rig's calibrated values and effects, each recording's metrics, over time"
     description = (
         "Read the diagnoses of the results database in time order and say, per "
-        "rig, which calibrated value drifted or sits off the rig file and which effect grew "
-        "(only trends beyond doubt); write trend.html with a figure per rig."
+        "rig, which calibrated value drifted, sits off the rig file or left its band far in "
+        "one run, and which effect grew (only trends beyond doubt); and, per recording, "
+        "which regression or comparison metric left its tolerance; write trend.html, one "
+        "self-contained file."
     )
 
     def add_arguments(self, parser: argparse.ArgumentParser) -> None:
-        """``--db URL [--rig NAME] [--out DIR]``."""
+        """``--db URL [--rig NAME] [--out DIR] [--baseline FILE]``."""
         parser.add_argument(
             "--db",
             required=True,
@@ -39,15 +41,27 @@ class TrendVerb(Verb):
             help="folder for trend.html and its figures (default: trend/ beside the database "
             "file; for PostgreSQL, trend/ here)",
         )
+        parser.add_argument(
+            "--baseline",
+            type=Path,
+            metavar="FILE",
+            help="a regress baseline JSON: the reference and tolerances of the stored "
+            "regressions' metrics (default: each recording's first run, regress's default "
+            "tolerances)",
+        )
 
     def main(self, args: argparse.Namespace) -> int:
         """The findings per rig; the report's path."""
         from brake_hil.app.trend import run_trend
 
-        result = run_trend(args.db, args.rig, args.out)
+        result = run_trend(args.db, args.rig, args.out, args.baseline)
         for rig in result.rigs:
             print(f"{rig.rig}: {len(rig.rows)} diagnoses")
             for line in rig.summary():
+                print(f"  {line}")
+        for recording in result.recordings:
+            print(f"{recording.recording} ({recording.kind}): {len(recording.runs)} runs")
+            for line in recording.summary():
                 print(f"  {line}")
         print(f"report: {result.report_path}")
         return 0
