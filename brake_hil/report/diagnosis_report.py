@@ -191,6 +191,13 @@ def nrmse_as_fraction(text: str) -> str:
     )
 
 
+def _confidence_figure(diagnosis: Diagnosis) -> str:
+    """``confidence 0.83``, or the cap's words with no number when a rule's cap set it."""
+    if diagnosis.confidence_capped is None:
+        return f"confidence {diagnosis.confidence:.2f}"
+    return f"{html.escape(diagnosis.confidence_capped)}: a rule's cap, not a measured confidence"
+
+
 def _confidence_words(
     confidence: float, doubt: str | None = None, runner_up: str | None = None
 ) -> str:
@@ -255,7 +262,7 @@ def _summary(diagnosis: Diagnosis, findings: list[Finding]) -> str:
     items.append(
         f"<b>How sure:</b> "
         f"{_confidence_words(diagnosis.confidence, doubt, _runner_up(diagnosis))} "
-        f"(confidence {diagnosis.confidence:.2f})."
+        f"({_confidence_figure(diagnosis)})."
     )
     checks = _rig_checks(diagnosis, findings)
     if checks:

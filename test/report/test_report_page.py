@@ -113,3 +113,16 @@ def test_the_diagnosis_words_get_the_nrmse_as_a_fraction() -> None:
 def test_next_steps_without_named_physics_run_no_improved_model(tmp_path: Path) -> None:
     steps = next_steps("bags/x", tmp_path, None, False, [])
     assert "run_chain" not in steps and "no improved model to run live" in steps
+
+
+def test_a_capped_confidence_is_said_in_words_not_as_a_number() -> None:
+    from types import SimpleNamespace
+
+    from brake_hil.report.diagnosis_report import _confidence_figure
+
+    measured = SimpleNamespace(confidence=0.8312, confidence_capped=None)
+    capped = SimpleNamespace(confidence=0.711, confidence_capped="not sure it is alone")
+    assert _confidence_figure(measured) == "confidence 0.83"  # type: ignore[arg-type]
+    words = _confidence_figure(capped)  # type: ignore[arg-type]
+    assert "not sure it is alone" in words and "cap" in words
+    assert not re.search(r"\d", words)
