@@ -20,6 +20,8 @@ from brake_hil.runtime import loopback_environment
 PROJECT = Path(__file__).resolve().parents[1]
 CONFIG = PROJECT / "config"
 PEER_DATA = Path(os.environ.get("BRAKE_HIL_PEER_DATA", PROJECT.parent / "shared" / "peer-data"))
+"""Real files no one here wrote (rosbag2's own test bags): ``$BRAKE_HIL_PEER_DATA``, by default
+the workplace's ``shared/peer-data`` folder beside the checkout; tests skip when absent."""
 
 os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
 # Fast DDS reads its profile once, when this process makes its first participant: the test

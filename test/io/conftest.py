@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
@@ -19,16 +18,9 @@ from brake_hil.topics import (
     TopicSpec,
 )
 from brake_hil.types import FloatArray
+from test.conftest import PEER_DATA as ROOT_PEER_DATA
 
-PEER_DATA = (
-    Path(
-        os.environ.get(
-            "BRAKE_HIL_PEER_DATA",
-            Path(__file__).resolve().parents[2] / ".." / "shared" / "peer-data",
-        )
-    )
-    / "rosbag2"
-)
+PEER_DATA = ROOT_PEER_DATA / "rosbag2"
 """rosbag2's own test bags, in the ``shared`` folder beside the repository checkout."""
 
 
