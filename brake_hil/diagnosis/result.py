@@ -220,18 +220,18 @@ def _nothing_named(
     summary: Summary, verdict: Verdict, baseline: Fit, best: Fit, baseline_metrics: Metrics
 ) -> str:
     """The words of a verdict that names no library effect (unexplained or none)."""
-    # Every NRMSE in words is the seed's (Tables 4-5, per cycle), as the report's table.
+    # Every NRMSE in words is the paper's (Tables 4-5, per cycle), a fraction, as `compare`'s.
     baseline_nrmse = max(m["nrmse"] for m in baseline_metrics.values())
     if verdict.effects:
         return (
-            f"The calibrated LTI model misses the held-out data by up to "
-            f"{100 * baseline_nrmse:.2f} % NRMSE, {summary.excess_ratio:.0f} times the "
+            f"The calibrated LTI model misses the held-out cycles by up to NRMSE "
+            f"{baseline_nrmse:.4f}, {summary.excess_ratio:.0f} times the "
             f"measurement noise's share, and no candidate explains it: the best, "
             f"{best.effects[0]}, cuts the error {fit_gain(baseline, best):.2f} times."
         )
     return (
-        f"The calibrated LTI model explains the recording: held-out NRMSE at most "
-        f"{100 * baseline_nrmse:.2f} %, {summary.excess_ratio:.1f} times the "
+        f"The calibrated LTI model explains the recording: NRMSE on the held-out cycles at "
+        f"most {baseline_nrmse:.4f}, {summary.excess_ratio:.1f} times the "
         f"measurement noise's share of the error"
         + (
             f" (under {NOISE_EXCESS:g}: nothing left to name)."
@@ -249,13 +249,14 @@ def _explain(
     baseline_metrics: Metrics,
     improved_metrics: Metrics,
 ) -> str:
-    """The verdict in words; NRMSE the seed's (per cycle), as in the metrics table."""
+    """The verdict in words; NRMSE the paper's (per cycle, a fraction), as `compare`'s."""
     gain = fit_gain(baseline, chosen)
     worst = max(baseline_metrics, key=lambda k: baseline_metrics[k]["nrmse"])
     parts = [
         f"{' and '.join(chosen.effects)}: the held-out mean squared error falls "
-        f"{gain:.1f} times ({worst} NRMSE {100 * baseline_metrics[worst]['nrmse']:.2f} % -> "
-        f"{100 * improved_metrics[worst]['nrmse']:.2f} %)."
+        f"{gain:.1f} times ({worst} NRMSE on the held-out cycles "
+        f"{baseline_metrics[worst]['nrmse']:.4f} with the calibrated LTI model -> "
+        f"{improved_metrics[worst]['nrmse']:.4f})."
     ]
     for name in chosen.effects:
         model = candidate(name)

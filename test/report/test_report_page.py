@@ -6,6 +6,7 @@ report read as a test engineer reads it; the words' helpers alone below it.
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 import re
 import shutil
@@ -126,3 +127,10 @@ def test_a_capped_confidence_is_said_in_words_not_as_a_number() -> None:
     words = _confidence_figure(capped)  # type: ignore[arg-type]
     assert "not sure it is alone" in words and "cap" in words
     assert not re.search(r"\d", words)
+
+
+def test_the_explanation_gives_the_nrmse_as_compare_does(report: tuple[Path, str]) -> None:
+    out, _ = report
+    explanation = json.loads((out / "diagnosis.json").read_text())["verdict"]["explanation"]
+    assert not re.search(r"NRMSE %|% NRMSE|NRMSE[^.]*\d+\.\d+ %", explanation), explanation
+    assert re.search(r"NRMSE on the held-out cycles 0\.\d{4} with the calibrated LTI", explanation)
