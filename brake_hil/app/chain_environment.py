@@ -8,9 +8,11 @@ middleware has no security plugins is refused before any node starts. No rclpy.
 from __future__ import annotations
 
 from collections.abc import Mapping
+import fcntl
 import importlib.util
 import os
 from pathlib import Path
+import tempfile
 import time
 
 from brake_hil.errors import DdsSecurityError
@@ -56,9 +58,38 @@ def check_security(env: Mapping[str, str]) -> None:
         raise DdsSecurityError(problem)
 
 
+DOMAIN_LOCKS = Path(tempfile.gettempdir())
+"""Where a process holds ``brake_hil_ros_domain_N.lock`` for each domain id it uses."""
+_held_domains: dict[int, int] = {}  # domain id -> the open, locked file's descriptor
+
+
 def choose_domain_id() -> int:
-    """A domain id (1-100) unlikely to be shared with another run on this host."""
-    return 1 + (os.getpid() * 7919 + time.time_ns() // 1_000_000) % 100
+    """A domain id (1-100) no other process on this host holds, held while this one lives.
+
+    Each id is a lock file (``DOMAIN_LOCKS``), taken with ``flock`` and kept open (not
+    inherited by the node processes: closed and released when this process ends). Starts at a
+    place drawn from the process id and the clock; when every id is held (or no lock can be
+    made), the drawn one (shared then, as before any lock).
+    """
+    start = (os.getpid() * 7919 + time.time_ns() // 1_000_000) % 100
+    for step in range(100):
+        domain = 1 + (start + step) % 100
+        if domain in _held_domains:
+            continue
+        try:
+            fd = os.open(
+                DOMAIN_LOCKS / f"brake_hil_ros_domain_{domain}.lock", os.O_RDWR | os.O_CREAT
+            )
+        except OSError:
+            continue  # another user's lock file: theirs
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            os.close(fd)
+            continue
+        _held_domains[domain] = fd
+        return domain
+    return 1 + start
 
 
 def node_available(name: str) -> bool:

@@ -22,6 +22,7 @@ from rclpy.context import Context
 from rclpy.node import Node
 
 from brake_hil.app.chain import ros_environment
+from brake_hil.app.chain_environment import choose_domain_id
 from brake_hil.nodes import common
 from brake_hil.physics.excitation import PulsingSchedule
 from brake_hil.physics.rig import load_rig
@@ -32,8 +33,8 @@ DDS_PROFILE_KEYS = ("FASTDDS_DEFAULT_PROFILES_FILE", "BRAKE_HIL_DDS_PROFILE")
 
 
 def unique_domain_id() -> int:
-    """A ROS domain id (1-100) for this test run."""
-    return 1 + (os.getpid() * 31 + time.time_ns() // 1_000_000_000) % 100
+    """A ROS domain id (1-100) for this test, held by this process (no other process gets it)."""
+    return choose_domain_id()
 
 
 @contextmanager
