@@ -18,7 +18,9 @@ RIG --layout L``, from a checkout's own ``.venv``) with N processes spinning
 * CPU of the node processes over the replay (user + system from ``/proc/PID/stat``, polled,
   % of one core), and that total against the middleware's floor for the same traffic:
   ``bench_middleware_floor.py --variant separate`` (bare rclpy nodes that only publish and
-  take the chain's messages) run under the same busy processes, in the same run.
+  take the chain's messages) run under the same busy processes, in the same run; a
+  one-process layout (``one-process``, ``one-paired``) against ``--variant one-process`` (the
+  same bare nodes in one process), measured when such a layout is run.
 
 Variants (``--variant NAME=CHECKOUT:LAYOUT[:PRIORITY]``, repeatable; PRIORITY is the chain's
 ``--realtime-priority``) are interleaved for each busy level (variant a, b, a, b, ... for
@@ -294,10 +296,17 @@ def measure(variant: Variant, busy: int, recording: Path, model: Path, out: Path
     return run
 
 
-def middleware_floor(seconds: float, busy: int) -> float | None:
-    """The bare-rclpy floor of the chain's traffic, four processes (% of one core)."""
+ONE_PROCESS_LAYOUTS = ("one-process", "one-paired")
+"""Layouts whose CPU is set against the one-process floor (the others: four processes)."""
+
+
+def middleware_floor(seconds: float, busy: int, variant: str = "separate") -> float | None:
+    """The bare-rclpy floor of the chain's traffic (% of one core).
+
+    ``variant`` of ``bench_middleware_floor.py``: ``separate`` (four processes), ``one-process``.
+    """
     script = PROJECT / "benchmarks" / "bench_middleware_floor.py"
-    command = [sys.executable, str(script), "--seconds", str(seconds), "--variant", "separate"]
+    command = [sys.executable, str(script), "--seconds", str(seconds), "--variant", variant]
     with busy_processes(busy):
         done = subprocess.run(command, capture_output=True, text=True, check=False)
     match = re.search(r"^total\s+([\d.]+)", done.stdout, re.MULTILINE)
@@ -412,12 +421,21 @@ def main(argv: Sequence[str] | None = None) -> int:
             f"{'':>60s}{floor if floor is not None else '-'} %",
             flush=True,
         )
+        floor_one = None
+        if args.floor_seconds > 0 and any(v.layout in ONE_PROCESS_LAYOUTS for v in args.variant):
+            floor_one = middleware_floor(args.floor_seconds, busy, "one-process")
+            print(
+                f"{busy:>4d}  {'floor, 1 process':16s}{os.getloadavg()[0]:6.1f}  "
+                f"{'':>60s}{floor_one if floor_one is not None else '-'} %",
+                flush=True,
+            )
         for round_ in range(args.rounds):
             for variant in args.variant:
                 out = args.out / f"{variant.name}_busy{busy}_{round_}"
                 run = measure(variant, busy, args.recording, args.model, out)
-                print(row(run, expected, floor), flush=True)
-                runs.append({**run.__dict__, "floor": floor, "expected": expected})
+                mine = floor_one if variant.layout in ONE_PROCESS_LAYOUTS else floor
+                print(row(run, expected, mine), flush=True)
+                runs.append({**run.__dict__, "floor": mine, "expected": expected})
     if args.json:
         args.json.write_text(json.dumps(runs, indent=2) + "\n", encoding="utf-8")
     return 0

@@ -26,7 +26,12 @@ from brake_hil.app.chain_environment import (
     node_available,
     ros_environment,
 )
-from brake_hil.app.chain_layouts import CONTAINER_STOP_S, LAYOUTS, start_layout
+from brake_hil.app.chain_layouts import (
+    CONTAINER_STOP_S,
+    LAYOUTS,
+    readers_per_topic,
+    start_layout,
+)
 from brake_hil.app.chain_processes import (
     NodeProcess,
     start_node,
@@ -227,13 +232,16 @@ def run_chain(
         f"ROS_DOMAIN_ID {run.env['ROS_DOMAIN_ID']}"
         + ("" if layout == "processes" else f", layout {layout}")
     )
-    subscribers = 2 if has_recorder else 1
+    readers = readers_per_topic(layout, has_recorder)
     plan: list[tuple[str, dict[str, Any]]] = []  # readers before their writers
     if run.bag_name is not None:
         plan.append(("recorder", {"output_dir": str(out_dir), "bag_name": run.bag_name}))
     plan.append(("comparator", {"summary_file": str(out_dir / "comparator.json")}))
     plan.append(
-        ("caliper_model", run.model_parameters(subscribers, realtime_priority=realtime_priority))
+        (
+            "caliper_model",
+            run.model_parameters(readers["predicted"], realtime_priority=realtime_priority),
+        )
     )
     air = [f"{AIR_PRESSURE.name}:1"] if has_recorder and source.air_pressure is not None else []
     source_parameters = {
@@ -242,7 +250,7 @@ def run_chain(
         "rate": float(rate),
         "exit_at_end": True,
         "wait_for_subscribers": 0,
-        "wait_for_topics": _source_waits(subscribers) + air,
+        "wait_for_topics": _source_waits(readers) + air,
         "wait_timeout": 30.0,
         "start_delay": 1.0,
         "realtime_priority": realtime_priority,
@@ -250,6 +258,11 @@ def run_chain(
     plan.append(("pressure_source", source_parameters))
     timeout_s = length_s / rate + SOURCE_MARGIN_S
     return run.execute(lambda: _replay(run, plan, layout, timeout_s))
+
+
+CONSUMERS_BELOW = 10
+"""With ``realtime_priority`` P, a one-process layout's other threads (the comparator, the
+recorder, the middleware) run under ``SCHED_FIFO`` at P - 10 (at least 1)."""
 
 
 def _replay(
@@ -263,7 +276,11 @@ def _replay(
     source_done = run.out_dir / "pressure_source.json"  # written as the source ends
     source_done.unlink(missing_ok=True)
     if "pressure_source" in LAYOUTS[layout]:  # the source runs in a container
-        run.nodes.extend(start_layout(plan, run.env, run.logs, layout))
+        loops = max(int(parameters.get("realtime_priority", 0)) for _, parameters in plan)
+        consumers = max(1, loops - CONSUMERS_BELOW) if loops > 0 else 0
+        run.nodes.extend(
+            start_layout(plan, run.env, run.logs, layout, container_priority=consumers)
+        )
         container = next(node for node in run.nodes if node.runs("pressure_source"))
         started = time.monotonic()
         if not wait_for_file(source_done, container, timeout_s):
@@ -297,15 +314,16 @@ def _expected_cycles(recording: Recording) -> dict[str, int]:
     return expected_cycles(stamps, measured)
 
 
-def _source_waits(subscribers: int) -> list[str]:
-    """The pressure source's ``wait_for_topics``: each topic's own consumers.
+def _source_waits(readers: dict[str, int]) -> list[str]:
+    """The pressure source's ``wait_for_topics``: each topic's own subscriptions.
 
     The model takes p_i, the comparator the measured outputs and the predictions, the recorder
-    everything: ``subscribers`` on each (2 with a recorder, 1 without).
+    everything: ``readers`` per kind of topic (:func:`readers_per_topic`).
     """
     return [
-        f"{spec.name}:{subscribers}"
-        for spec in (MASTER_CYLINDER_PRESSURE, *MEASURED_OUTPUTS, *PREDICTED_OUTPUTS)
+        f"{MASTER_CYLINDER_PRESSURE.name}:{readers['p_i']}",
+        *(f"{spec.name}:{readers['measured']}" for spec in MEASURED_OUTPUTS),
+        *(f"{spec.name}:{readers['predicted']}" for spec in PREDICTED_OUTPUTS),
     ]
 
 
@@ -374,7 +392,7 @@ def run_can_chain(
         # the emulator starts once this source opens the port: open it only once the model
         # and the recorder take p_i (discovery can take over a second on a busy host)
         "wait_for_subscribers": 0,
-        "wait_for_topics": _source_waits(2),
+        "wait_for_topics": _source_waits(readers_per_topic("processes")),
         "wait_timeout": 30.0,
     }
     return run.execute(lambda: _emulate(run, emulator, source, pulsing_s + 120.0))

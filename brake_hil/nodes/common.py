@@ -20,10 +20,13 @@ How a node process runs (rclpy started, callbacks spun, signals) is
 
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Callable, Iterable, Mapping, Sequence
 import math
 from operator import attrgetter
+import os
 import struct
+import threading
 import time
 from typing import TYPE_CHECKING, Any, TypeVar
 
@@ -78,6 +81,7 @@ __all__ = [
     "OK",
     "RECORDINGS_HOME",
     "SAMPLE_QOS",
+    "SHARED_TAKES_VARIABLE",
     "STALE",
     "WARN",
     "BackgroundSpinner",
@@ -186,6 +190,10 @@ def _never_called(message: Any) -> None:
     del message
 
 
+SHARED_TAKES_VARIABLE = "BRAKE_HIL_SHARED_TAKES"
+"""Environment variable: ``1`` shares one subscription per topic among a process's nodes."""
+
+
 class PolledSubscription:
     """A raw subscription that its owner's thread takes from directly, with no executor.
 
@@ -195,21 +203,93 @@ class PolledSubscription:
     all its work on one thread and is spun by no executor (no per-message callback dispatch,
     the GIL never contended at a deadline). The subscription's history (``qos.depth``) must
     hold what arrives between two takes.
+
+    With ``BRAKE_HIL_SHARED_TAKES=1`` in the environment (what the ``one-paired`` layout's
+    container gets), nodes of one process (one rclpy context) that poll the same topic with
+    the same QoS share one subscription (:class:`_SharedTopic`): the model, the comparator and
+    the recorder take each sample once from the middleware, not once each; the topic then
+    shows one subscription for them all (what a publisher waiting for readers must count).
     """
+
+    def __init__(self, node: Node, message_type: Any, topic: str, qos: QoSProfile) -> None:
+        if os.environ.get(SHARED_TAKES_VARIABLE) == "1":
+            self._shared = _SharedTopic.join(node, message_type, topic, qos)
+        else:
+            self._shared = _SharedTopic(node, message_type, topic, qos)
+        self._queue = self._shared.add_consumer()
+
+    def take_all(self) -> list[tuple[bytes, dict[str, Any]]]:
+        """Every held message as ``(cdr_bytes, info)``, oldest first."""
+        return self._shared.take_for(self._queue)
+
+
+class _SharedTopic:
+    """One raw subscription of a topic in a process, taken for every consumer that joined.
+
+    The subscription belongs to a node of its own (``brake_hil_taps``, one per context,
+    destroyed with the context), so it outlives any one consumer's node. Each take fans the
+    messages out to every consumer's queue (at most ``qos.depth`` kept each, as the
+    middleware's history would); a consumer's queue is emptied when it takes.
+    """
+
+    _registry: dict[tuple[int, str, str, tuple[int, int, int, int]], _SharedTopic] = {}
+    _taps: dict[int, Node] = {}
+    _lock = threading.Lock()
 
     def __init__(self, node: Node, message_type: Any, topic: str, qos: QoSProfile) -> None:
         self._subscription = node.create_subscription(
             message_type, topic, _never_called, qos, raw=True
         )
+        self._depth = int(qos.depth) or None
+        self._queues: list[deque[tuple[bytes, dict[str, Any]]]] = []
+        self._take_lock = threading.Lock()
 
-    def take_all(self) -> list[tuple[bytes, dict[str, Any]]]:
-        """Every held message as ``(cdr_bytes, info)``, oldest first."""
+    @classmethod
+    def join(cls, node: Node, message_type: Any, topic: str, qos: QoSProfile) -> _SharedTopic:
+        """The process's subscription of ``topic`` with ``qos`` (made on first use)."""
+        context = node.context
+        qos_key = (int(qos.history), int(qos.depth), int(qos.reliability), int(qos.durability))
+        key = (id(context), topic, f"{message_type.__module__}.{message_type.__name__}", qos_key)
+        with cls._lock:
+            shared = cls._registry.get(key)
+            if shared is None:
+                tap = cls._taps.get(id(context))
+                if tap is None or not tap.context.ok():
+                    tap = Node("brake_hil_taps", context=context, start_parameter_services=False)
+                    cls._taps[id(context)] = tap
+                    # a new context may reuse a shut-down one's id: forget its topics
+                    for old in [k for k in cls._registry if k[0] == id(context)]:
+                        del cls._registry[old]
+                shared = cls._registry[key] = cls(tap, message_type, topic, qos)
+            return shared
+
+    def add_consumer(self) -> deque[tuple[bytes, dict[str, Any]]]:
+        """A new consumer's queue: what arrives from now on."""
+        queue: deque[tuple[bytes, dict[str, Any]]] = deque(maxlen=self._depth)
+        with self._take_lock:
+            self._queues.append(queue)
+        return queue
+
+    def take_for(
+        self, queue: deque[tuple[bytes, dict[str, Any]]]
+    ) -> list[tuple[bytes, dict[str, Any]]]:
+        """Take what the middleware holds into every queue; empty and return ``queue``."""
         handle, msg_type = self._subscription.handle, self._subscription.msg_type
-        taken: list[tuple[bytes, dict[str, Any]]] = []
-        with handle:
-            while (message := handle.take_message(msg_type, True)) is not None:
-                taken.append(message)
-        return taken
+        with self._take_lock:
+            with handle:
+                taken = []
+                while (message := handle.take_message(msg_type, True)) is not None:
+                    taken.append(message)
+            if len(self._queues) == 1:
+                if not queue:
+                    return taken
+                queue.extend(taken)
+            else:
+                for each in self._queues:
+                    each.extend(taken)
+            mine = list(queue)
+            queue.clear()
+        return mine
 
 
 class PolledInput(PolledSubscription):

@@ -29,6 +29,12 @@ from brake_hil.nodes.container import (
     NodeSpec,
 )
 
+SWITCH_INTERVAL_S = 0.0002
+"""Python's GIL switch interval in the container (s; Python's default 0.005): a thread that
+wants the GIL (the source's 1 kHz loop) waits at most this long for another thread that holds
+it in Python code (the recorder's or the comparator's batch). ``BRAKE_HIL_SWITCH_INTERVAL_S``
+overrides it."""
+
 # --------------------------------------------------------------------------- members
 
 
@@ -234,6 +240,7 @@ def launch(global_args: Sequence[str], specs: Sequence[NodeSpec]) -> int:
 
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, on_signal)
+    sys.setswitchinterval(float(os.environ.get("BRAKE_HIL_SWITCH_INTERVAL_S", SWITCH_INTERVAL_S)))
     os.environ.setdefault("RCUTILS_LOGGING_USE_STDOUT", "1")
     try:
         common.init_ros([f"brake_hil.nodes.{NAME}", *global_args])
