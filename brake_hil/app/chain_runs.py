@@ -54,10 +54,10 @@ from brake_hil.topics import (
 
 __all__ = ["SOURCE_MARGIN_S", "Notice", "run_can_chain", "run_chain"]
 
-SOURCE_MARGIN_S = 60.0
+SOURCE_MARGIN_S = 100.0
 """How long past the replay's own length the source is given to end (s): its wait for its
 subscribers (at most 30 s), its start delay (1 s) and its wait for their acknowledgements at
-the end (``common.ACK_WAIT_AT_END_S``, 20 s)."""
+the end (``common.ACK_WAIT_AT_END_S``, 60 s)."""
 
 Notice = Callable[[str], None]
 """Called with a one-line notice while the chain runs (what it starts, what went wrong)."""
