@@ -309,7 +309,7 @@ def middleware_floor(seconds: float, busy: int, variant: str = "separate") -> fl
     command = [sys.executable, str(script), "--seconds", str(seconds), "--variant", variant]
     with busy_processes(busy):
         done = subprocess.run(command, capture_output=True, text=True, check=False)
-    match = re.search(r"^total\s+([\d.]+)", done.stdout, re.MULTILINE)
+    match = re.search(r"^total(?: \(one process\))?\s+([\d.]+)", done.stdout, re.MULTILINE)
     if match is None:
         print(f"floor: no figure (exit {done.returncode}): {done.stderr.strip()[-300:]}")
         return None

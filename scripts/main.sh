@@ -2,8 +2,9 @@
 # Set up (first run), then the main job on a bundled recording of the virtual rig (the paper's
 # one-washer rig, air-driven, seals that stick and slip):
 #   1. the node chain replays it: pressure_source -> caliper_model (the rig file's LTI model)
-#      -> comparator -> recorder, each its own process on loopback DDS; prints the comparison
-#      and where the MCAP is;
+#      -> comparator -> recorder, in one process (the chain's default layout, one-paired) on
+#      loopback DDS, its loop under SCHED_FIFO 20 where the user may (else normal priority);
+#      prints the comparison and where the MCAP is;
 #   2. brake-hil diagnose finds what the LTI model left out, writes out/diagnosis/ (report.html,
 #      diagnosis.json, improved_model.json);
 #   3. the chain runs again with the improved model live.
@@ -24,7 +25,7 @@ chain() {  # a chain run that fails its verdict (exit 1) is said at the end; bad
   local step="$1"
   shift
   local code=0
-  .venv/bin/python -m brake_hil.nodes.chain "$@" || code=$?
+  .venv/bin/python -m brake_hil.nodes.chain "$@" --realtime-priority 20 || code=$?
   [ "$code" -eq 0 ] || [ "$code" -eq 1 ] || exit "$code"
   [ "$code" -eq 0 ] || failed+=("$step")
 }

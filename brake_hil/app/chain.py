@@ -18,8 +18,10 @@ brake_hil.nodes.container``: one rclpy context, Fast DDS delivers between them i
 process), ``model-apart`` (the source, comparator and recorder in one process, the caliper
 model in its own: its 1 kHz loop shares no GIL, the other three no loopback traffic),
 ``two-process`` (the source and the model in one process, the comparator and the recorder in
-another) or ``paired`` (as ``two-process``, with the model stepped on the source's thread right
-after each sample: one thread for the two 1 kHz loops). Each node
+another), ``paired`` (as ``two-process``, with the model stepped on the source's thread right
+after each sample: one thread for the two 1 kHz loops) or ``one-paired`` (the default,
+:data:`DEFAULT_LAYOUT`: the four in one process, the model stepped on the source's thread, one
+subscription per topic for the model, the comparator and the recorder). Each node
 gets the same parameters from its own params file, started with the same environment; with a
 container the launcher waits for the source's statistics file (written as its replay ends)
 instead of the source's exit, and stops the container with SIGINT, which stops its nodes in the
@@ -49,6 +51,7 @@ from brake_hil.app.chain_environment import (
 )
 from brake_hil.app.chain_layouts import (
     CONTAINER_STOP_S,
+    DEFAULT_LAYOUT,
     LAYOUT_PARAMETERS,
     LAYOUTS,
     NODE_ORDER,
@@ -72,6 +75,7 @@ from brake_hil.app.chain_runs import SOURCE_MARGIN_S, Notice, run_can_chain, run
 __all__ = [
     "CONTAINER",
     "CONTAINER_STOP_S",
+    "DEFAULT_LAYOUT",
     "DEFAULT_MODEL",
     "DEFAULT_RECORDING",
     "LAYOUTS",

@@ -59,7 +59,7 @@ LAYOUT_PARAMETERS: dict[str, dict[str, dict[str, Any]]] = {
 SHARED_TAKES = frozenset({"one-paired"})
 """Layouts whose container shares one subscription per topic among its nodes
 (``BRAKE_HIL_SHARED_TAKES=1``, :class:`brake_hil.nodes.common.PolledSubscription`)."""
-DEFAULT_LAYOUT = "processes"
+DEFAULT_LAYOUT = "one-paired"
 """The chain's layout when none is asked for."""
 SHARED_TAKES_VARIABLE = "BRAKE_HIL_SHARED_TAKES"
 """What such a container gets in its environment (:mod:`brake_hil.nodes.common`'s name)."""

@@ -28,6 +28,7 @@ from brake_hil.app.chain_environment import (
 )
 from brake_hil.app.chain_layouts import (
     CONTAINER_STOP_S,
+    DEFAULT_LAYOUT,
     LAYOUTS,
     readers_per_topic,
     start_layout,
@@ -185,7 +186,7 @@ def run_chain(
     progress: Notice | None = None,
     recorder: bool = True,
     realtime_priority: int = 0,
-    layout: str = "processes",
+    layout: str = DEFAULT_LAYOUT,
 ) -> ChainResult:
     """Run the chain on ``recording`` once (see :mod:`brake_hil.app.chain`).
 
@@ -229,8 +230,7 @@ def run_chain(
     run.schedule_s = length_s / rate
     run.say(
         f"chain on {recording} ({length_s:.1f} s at rate {rate:g}), model {model_file}, "
-        f"ROS_DOMAIN_ID {run.env['ROS_DOMAIN_ID']}"
-        + ("" if layout == "processes" else f", layout {layout}")
+        f"ROS_DOMAIN_ID {run.env['ROS_DOMAIN_ID']}, layout {layout}"
     )
     readers = readers_per_topic(layout, has_recorder)
     plan: list[tuple[str, dict[str, Any]]] = []  # readers before their writers

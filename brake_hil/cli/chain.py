@@ -21,7 +21,7 @@ import sys
 from typing import TYPE_CHECKING
 
 from brake_hil.app.chain_environment import DEFAULT_MODEL, DEFAULT_RECORDING, PROJECT
-from brake_hil.app.chain_layouts import LAYOUTS
+from brake_hil.app.chain_layouts import DEFAULT_LAYOUT, LAYOUTS
 from brake_hil.app.chain_processes import CONTAINER
 from brake_hil.errors import BrakeHilError
 from brake_hil.topics import OUTPUT_CHANNELS
@@ -91,7 +91,7 @@ def build_parser() -> argparse.ArgumentParser:
         default=0,
         help="SCHED_FIFO priority of the source's and the model's loop threads (0: none)",
     )
-    add_layout_arguments(parser)
+    add_layout_arguments(parser, default=None)
     parser.add_argument(
         "--can-emulator",
         action="store_true",
@@ -106,18 +106,25 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def add_layout_arguments(parser: argparse.ArgumentParser) -> None:
-    """``--layout`` (which nodes share a process) and ``--one-process``, into ``args.layout``."""
+def add_layout_arguments(
+    parser: argparse.ArgumentParser, default: str | None = DEFAULT_LAYOUT
+) -> None:
+    """``--layout`` (which nodes share a process) and ``--one-process``, into ``args.layout``.
+
+    ``default`` None: the caller picks (the chain: :data:`DEFAULT_LAYOUT` for a replay).
+    """
     parser.add_argument(
         "--layout",
         choices=tuple(LAYOUTS),
-        default="processes",
-        help="which nodes share a process: processes (each its own), two-process (source and "
-        "model in one, comparator and recorder in another), paired (as two-process, the model "
-        "stepped on the source's thread after each sample), model-apart (source, comparator "
-        "and recorder in one process, the caliper model in its own), one-process (the four "
-        "in python -m brake_hil.nodes.container: the least CPU, but the model's loop shares "
-        "the GIL: period error and latency of milliseconds at p99)",
+        default=default,
+        help=f"which nodes share a process (default {DEFAULT_LAYOUT} for a replay, processes "
+        "with --can-emulator): one-paired (the four in one process, the model stepped on the "
+        "source's thread, one subscription per topic), processes (each its own), two-process "
+        "(source and model in one, comparator and recorder in another), paired (as "
+        "two-process, the model stepped on the source's thread after each sample), "
+        "model-apart (source, comparator and recorder in one process, the caliper model in its "
+        "own), one-process (the four in python -m brake_hil.nodes.container: the model's loop "
+        "on its own thread shares the GIL: period error and latency of milliseconds at p99)",
     )
     parser.add_argument(
         "--one-process",
@@ -132,6 +139,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """``python -m brake_hil.nodes.chain``; returns the exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    if args.layout is None:
+        args.layout = "processes" if args.can_emulator else DEFAULT_LAYOUT
     if args.layout != "processes" and args.can_emulator:
         parser.error("--layout runs a replay; it does not combine with --can-emulator")
     from brake_hil.app.chain_runs import run_can_chain, run_chain
