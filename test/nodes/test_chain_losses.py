@@ -47,6 +47,7 @@ def _launch(out: Path) -> subprocess.Popen[str]:
         str(RECORDING),
         "--out",
         str(out),
+        *("--layout", "processes"),  # the recorder in a process of its own, to stop or kill
     ]
     return subprocess.Popen(
         command, env=ros_environment(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
