@@ -237,12 +237,8 @@ def run_chain(
     if run.bag_name is not None:
         plan.append(("recorder", {"output_dir": str(out_dir), "bag_name": run.bag_name}))
     plan.append(("comparator", {"summary_file": str(out_dir / "comparator.json")}))
-    plan.append(
-        (
-            "caliper_model",
-            run.model_parameters(readers["predicted"], realtime_priority=realtime_priority),
-        )
-    )
+    model = run.model_parameters(readers["predicted"], realtime_priority=realtime_priority)
+    plan.append(("caliper_model", model))
     air = [f"{AIR_PRESSURE.name}:1"] if has_recorder and source.air_pressure is not None else []
     source_parameters = {
         "recording": str(recording),
