@@ -474,7 +474,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--json", type=Path, help="write the figures here too")
     parser.add_argument("--keep-bag", action="store_true", help="keep the recorder's MCAP")
     parser.add_argument("--no-recorder", action="store_true")
-    add_layout_arguments(parser)
+    add_layout_arguments(parser, default="processes")
     parser.add_argument("--role", choices=("probe", "reference"), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.role == "probe":
