@@ -113,18 +113,25 @@ def add_layout_arguments(
 
     ``default`` None: the caller picks (the chain: :data:`DEFAULT_LAYOUT` for a replay).
     """
+    said = (
+        f"default {DEFAULT_LAYOUT} for a replay, processes with --can-emulator"
+        if default is None
+        else f"default {default}"
+    )
     parser.add_argument(
         "--layout",
         choices=tuple(LAYOUTS),
         default=default,
-        help=f"which nodes share a process (default {DEFAULT_LAYOUT} for a replay, processes "
-        "with --can-emulator): one-paired (the four in one process, the model stepped on the "
-        "source's thread, one subscription per topic), processes (each its own), two-process "
-        "(source and model in one, comparator and recorder in another), paired (as "
-        "two-process, the model stepped on the source's thread after each sample), "
-        "model-apart (source, comparator and recorder in one process, the caliper model in its "
-        "own), one-process (the four in python -m brake_hil.nodes.container: the model's loop "
-        "on its own thread shares the GIL: period error and latency of milliseconds at p99)",
+        help=(
+            f"which nodes share a process ({said}): one-paired (the four in one process, the "
+            "model stepped on the source's thread, one subscription per topic), processes "
+            "(each its own), two-process (source and model in one, comparator and recorder in "
+            "another), paired (as two-process, the model stepped on the source's thread after "
+            "each sample), model-apart (source, comparator and recorder in one process, the "
+            "caliper model in its own), one-process (the four in python -m "
+            "brake_hil.nodes.container: the model's loop on its own thread shares the GIL: "
+            "period error and latency of milliseconds at p99)"
+        ),
     )
     parser.add_argument(
         "--one-process",
