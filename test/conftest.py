@@ -52,6 +52,7 @@ SLOW_TESTS: tuple[str, ...] = (
     "test_diagnose_and_benchmark_refuse_bad_input_with_one_line",
     "test_benchmark_of_one_null_case_shows_progress_and_n_a_for_empty_categories",
     "test_cases_command_writes_family_b_cases",
+    "test_cases_command_writes_family_c_cases",
     "test_cases_writes_recordings_and_labels_apart",
     # blind diagnoses in this process
     "test_a_blind_diagnosis_of_a_strong_leak_names_no_library_effect",

@@ -35,7 +35,7 @@ class CaseOptions:
         error_scale: multiplies the one-sigma tolerances the parameter errors are drawn from.
         kinds: keep only cases of these kinds (null, single, pair, unexplained), numbered as
             in the full schedule; the count is then the number kept (empty: every kind).
-        family: the family of truth laws (``a``, the registered laws, or ``b``; see
+        family: the family of truth laws (``a``, the registered laws, ``b`` or ``c``; see
             :mod:`brake_hil.virtual_rig.cases`).
         drive: the pulsing frequency and maximum pressures (default: the paper's).
     """

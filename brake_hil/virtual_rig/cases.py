@@ -64,6 +64,7 @@ from brake_hil.virtual_rig.family_b import (
     is_family_b_law,
     outside_names,
 )
+from brake_hil.virtual_rig.family_c import EFFECTS_C, FAMILY_C, OUTSIDE_C, MeasurementChainC
 from brake_hil.virtual_rig.rig_yaml import rig_to_mapping, rig_with_values, write_rig
 from brake_hil.virtual_rig.simulator import simulate_rig
 
@@ -85,9 +86,10 @@ PERTURBED_KEYS = (
 """Rig values that differ between nominal and truth (the catalogue-grade ones; geometry is
 taken as measured)."""
 
-FAMILIES = ("a", FAMILY_B)
-"""The families of truth laws a case can be made of (``a``: the registered laws)."""
-_FAMILY_STREAM = {"a": (), FAMILY_B: (2,)}
+FAMILIES = ("a", FAMILY_B, FAMILY_C)
+"""The families of truth laws a case can be made of (``a``: the registered laws; ``c``: the
+laws written from the physics alone, :mod:`~brake_hil.virtual_rig.family_c`)."""
+_FAMILY_STREAM = {"a": (), FAMILY_B: (2,), FAMILY_C: (3,)}
 """What each family appends to a case's seed sequence (family a's draws are the original)."""
 
 SUBTLE_STRENGTHS = (0.15, 0.35)
@@ -207,6 +209,8 @@ def _library(family: str) -> tuple[list[str], list[str]]:
     """
     if family == FAMILY_B:
         return list(EFFECTS_B), list(outside_names())
+    if family == FAMILY_C:
+        return list(EFFECTS_C), list(OUTSIDE_C)
     outside = [name for name, cls in OUT_OF_LIBRARY.items() if not is_family_b_law(cls)]
     return list(EFFECTS), outside
 
@@ -260,6 +264,8 @@ def _draw_effect(
     strength = float(np.round(rng.uniform(low, high), 3))
     if family == FAMILY_B and name in EFFECTS_B:
         return EFFECTS_B[name].draw(rng, strength)
+    if family == FAMILY_C:
+        return {**EFFECTS_C, **OUTSIDE_C}[name].draw(rng, strength)
     return effect_class(name).draw(rng, strength)
 
 
@@ -369,12 +375,14 @@ def case_excitation(
 
 
 def measurement_chain(spec: CaseSpec) -> tuple[Effect, ...]:
-    """The case's measurement chain beyond the seed's DAQ: family b's, none for family a.
+    """The case's measurement chain beyond the seed's DAQ: family b's or c's, none for a.
 
     Installed after the effects (their laws act first on a channel), never labelled as one.
     """
     if spec.family == FAMILY_B:
         return (MeasurementChainB(seed=spec.noise_seed),)
+    if spec.family == FAMILY_C:
+        return (MeasurementChainC(seed=spec.noise_seed),)
     return ()
 
 

@@ -201,7 +201,7 @@ def test_family_b_plan_covers_every_effect_subtle_and_strong_in_its_first_round(
 
 def test_an_unknown_family_is_refused() -> None:
     with pytest.raises(EffectError, match="family"):
-        select_cases(3, 0, family="c")
+        select_cases(3, 0, family="d")
 
 
 def test_the_family_b_measurement_chain_is_not_an_effect_and_lags_every_channel(
@@ -247,7 +247,7 @@ def test_cases_command_writes_family_b_cases(tmp_path: Path) -> None:
 
 
 def test_cases_command_refuses_an_unknown_family(tmp_path: Path) -> None:
-    result = brake_hil("cases", "--family", "c", "--out", tmp_path / "bench")
+    result = brake_hil("cases", "--family", "d", "--out", tmp_path / "bench")
     assert result.returncode == 2
     assert "--family" in result.stderr and "invalid choice" in result.stderr
     assert not (tmp_path / "bench").exists()

@@ -46,10 +46,11 @@ class CasesVerb(Verb):
         )
         parser.add_argument(
             "--family",
-            choices=("a", "b"),
+            choices=("a", "b", "c"),
             default="a",
             help="family of truth laws: a (the registered laws, default) or b (a second, "
-            "structurally different law per effect and its own measurement chain)",
+            "structurally different law per effect and its own measurement chain) or c (a "
+            "third, written from the physics alone, with its own chain)",
         )
         parser.add_argument(
             "--excitation-hz",
