@@ -189,6 +189,7 @@ def simulate_rig(
     *,
     operating_pressure: float | None = None,
     master_damping_ratio: float = MASTER_DAMPING_RATIO,
+    rig_air: str = "linearised",
     seed: int = 0,
     rtol: float = RELATIVE_TOLERANCE,
     max_step: float = MAX_STEP,
@@ -207,6 +208,9 @@ def simulate_rig(
             excitation period.
         master_damping_ratio: damping ratio of the master piston (air-driven runs); eq. 21a
             has none, which leaves a ~270 Hz mode undamped. 0 reproduces eq. 21a exactly.
+        rig_air: the law of the rig's own air (:data:`~brake_hil.virtual_rig.plant.RIG_AIR_LAWS`):
+            ``linearised`` at the operating pressure (eq. 18, the LTI model's), or
+            ``instantaneous``, isothermal at each chamber's pressure (a real rig's).
         seed: seed of the sensor noise.
         rtol: relative tolerance; the absolute tolerance is ``min(rtol, 1e-6)`` on the
             scaled states (Pa / 1e6, m / 1e-5, ...).
@@ -229,6 +233,7 @@ def simulate_rig(
         effects,
         max(mean_pressure, LOWEST_OPERATING_PRESSURE),
         master_damping_ratio if excitation.air_driven else 0.0,
+        rig_air,
     )
     dynamics = Dynamics(plant, excitation, schedule)
     dynamics.progress = progress
