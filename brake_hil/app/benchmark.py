@@ -153,7 +153,8 @@ def read_labels(path: Path) -> dict[str, list[str]]:
     [...]}}}``) or a plain ``{case: {"effects": [...]}}``.
     """
     return {
-        case: list(entry["expected_effects"]) for case, entry in read_case_labels(path).items()
+        case: [str(e) for e in entry["expected_effects"]]  # type: ignore[attr-defined]
+        for case, entry in read_case_labels(path).items()
     }
 
 
@@ -263,7 +264,8 @@ def is_right(result: CaseResult, label: Mapping[str, object]) -> bool:
         return not result.effects and str(label.get("key")) in _rig_value_keys(result)
     if kind == "more_air":
         return _air_state(result) == MORE_AIR
-    return set(result.effects) == set(label["expected_effects"])  # type: ignore[call-overload]
+    expected: Sequence[str] = label["expected_effects"]  # type: ignore[assignment]
+    return set(result.effects) == set(expected)
 
 
 def family_figures(items: Sequence[Scored]) -> dict[str, object]:
