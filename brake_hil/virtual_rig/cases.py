@@ -66,9 +66,6 @@ from brake_hil.virtual_rig.draws import (
     draw_out_of_tolerance,
     draw_parameter_errors,
 )
-from brake_hil.virtual_rig.draws import (
-    PERTURBED_KEYS as PERTURBED_KEYS,
-)
 from brake_hil.virtual_rig.effects import (
     EFFECTS,
     OUT_OF_LIBRARY,

@@ -13,7 +13,6 @@ from brake_hil.io.recording_reader import read_recording
 from brake_hil.physics.rig import load_rig
 from brake_hil.virtual_rig import EFFECTS
 from brake_hil.virtual_rig.cases import (
-    PERTURBED_KEYS,
     SEED_DRIVE,
     STRONG_STRENGTHS,
     SUBTLE_STRENGTHS,
@@ -25,6 +24,7 @@ from brake_hil.virtual_rig.cases import (
     select_cases,
     truth_rig,
 )
+from brake_hil.virtual_rig.draws import PERTURBED_KEYS
 from brake_hil.virtual_rig.effects import OUT_OF_LIBRARY
 from brake_hil.virtual_rig.rig_yaml import rig_to_mapping
 
