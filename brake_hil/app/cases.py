@@ -33,11 +33,15 @@ class CaseOptions:
     Attributes:
         pulsing_s: seconds of 5 Hz pulsing per maximum pressure (5 s: 18 s recordings).
         error_scale: multiplies the one-sigma tolerances the parameter errors are drawn from.
-        kinds: keep only cases of these kinds (null, single, pair, unexplained), numbered as
-            in the full schedule; the count is then the number kept (empty: every kind).
+        kinds: keep only cases of these kinds (null, single, pair, unexplained,
+            out_of_tolerance, more_air), numbered as in the full schedule; the count is then
+            the number kept (empty: every kind).
         family: the family of truth laws (``a``, the registered laws, ``b`` or ``c``; see
             :mod:`brake_hil.virtual_rig.cases`).
         drive: the pulsing frequency and maximum pressures (default: the paper's).
+        span: how the truth rigs differ from their files: ``contract`` (every toleranced
+            value uniform within its tolerance, the new kinds mixed in) or ``seed`` (the
+            stored sets' draw, to replay them); see :mod:`brake_hil.virtual_rig.draws`.
     """
 
     pulsing_s: float = 5.0
@@ -45,6 +49,7 @@ class CaseOptions:
     kinds: tuple[str, ...] = ()
     family: str = "a"
     drive: CaseDrive = SEED_DRIVE
+    span: str = "contract"
 
 
 def generate_cases(
@@ -70,7 +75,8 @@ def generate_cases(
 
     Raises:
         FileExistsError: ``out`` holds files already.
-        EffectError: an unknown family (before anything is written).
+        EffectError: an unknown family or span, or a kind the span never makes (before
+            anything is written).
         BrakeHilError: a case could not be simulated (the first such, after every case ran;
             no ``labels.json`` is written then).
     """
@@ -78,7 +84,12 @@ def generate_cases(
     if out.exists() and any(out.iterdir()):
         raise FileExistsError(f"{out}: not empty; choose a new directory for the cases")
     specs = select_cases(
-        count, seed, options.kinds, error_scale=options.error_scale, family=options.family
+        count,
+        seed,
+        options.kinds,
+        error_scale=options.error_scale,
+        family=options.family,
+        span=options.span,
     )
     cases_dir = out / "cases"
     cases_dir.mkdir(parents=True, exist_ok=True)
@@ -109,6 +120,7 @@ def generate_cases(
         kinds=options.kinds,
         family=options.family,
         drive=options.drive,
+        span=options.span,
     )
 
 

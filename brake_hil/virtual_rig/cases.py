@@ -7,12 +7,21 @@ written apart from them (:func:`write_labels`: ``DIR/labels.json``, which a diag
 ``DIR/cases`` never reads); :func:`brake_hil.app.cases.generate_cases` runs
 :func:`make_case` over the described cases in parallel. A case is:
 
-* ``null``: a parameter error only (truth differs from nominal within the rig tolerances);
+* ``null``: a parameter error only (truth differs from nominal within the rig tolerances),
+  alternately on a degassed rig (``fluid.air_fraction`` 1e-6 in the rig file and the truth)
+  and with the rig file's own air, isothermal at each chamber's instantaneous pressure
+  (:data:`~brake_hil.virtual_rig.plant.RIG_AIR_LAWS`: the rig itself, not an effect), labelled
+  ``"air": "degassed"`` or ``"rig_file"``;
 * ``single``: one effect at a ``subtle`` (strength 0.15-0.35) or ``strong`` (0.7-1.0)
   strength, on top of a parameter error;
 * ``pair``: two different effects, each subtle or strong;
 * ``unexplained``: physics outside the diagnosis's library (``OUT_OF_LIBRARY``: a transducer
-  gain that changes with its reading), subtle or strong, labelled ``["unexplained"]``.
+  gain that changes with its reading), subtle or strong, labelled ``["unexplained"]``;
+* ``out_of_tolerance`` (``contract`` span only): no effect, one rig value 1 to 2 tolerances
+  off (:func:`~brake_hil.virtual_rig.draws.draw_out_of_tolerance`), the rest within,
+  labelled with its ``key`` and ``ratio`` (truth / rig file);
+* ``more_air`` (``contract`` span only): no effect, the rig's own air (instantaneous law) at
+  2 to 3 times the rig file's fraction, labelled with its ``ratio``.
 
 Two families of truth laws make the cases: ``a`` (the default) draws each effect's law from
 :data:`~brake_hil.virtual_rig.effects.EFFECTS` and its out-of-library cases from
@@ -28,10 +37,12 @@ cases, every effect both subtle and strong, and pairs. Every draw comes from
 ``numpy.random.default_rng([seed, case number])``, so a case does not depend on how many
 others are generated or in which process (family b: ``default_rng([seed, case number, 2])``).
 
-Parameter errors: each value of ``PERTURBED_KEYS`` is multiplied by ``1 + e``, ``e`` drawn
-from a normal distribution of standard deviation ``error_scale / 2`` times the key's
-tolerance (interface.md: ``caliper.stiffness`` 25 %, ``needle_valve.resistance`` 40 %, seal
-values 30 %, ``fluid.air_fraction`` 100 %, the rest 10 %, one sigma) and clipped to one sigma.
+Parameter errors (:mod:`~brake_hil.virtual_rig.draws`): by default (``span="contract"``)
+every toleranced value of the rig file is drawn uniformly within its tolerance (the air and
+the seal values within 10 %); ``span="seed"`` replays the stored sets' draw (13 keys, a
+normal of half a tolerance clipped at one) and their schedule, without the new kinds.
+Per round of the ``contract`` schedule, one ``out_of_tolerance`` and one ``more_air`` case
+follow the 26 (family a) of the ``seed`` schedule: 2 of 28, 7 % each.
 """
 
 from __future__ import annotations
@@ -49,6 +60,12 @@ from brake_hil import __version__
 from brake_hil.physics.excitation import SEED_MAX_PRESSURES
 from brake_hil.physics.rig import Rig, rig_from_mapping
 from brake_hil.virtual_rig.bag import write_run
+from brake_hil.virtual_rig.draws import (
+    MORE_AIR_RATIOS,
+    SPANS,
+    draw_out_of_tolerance,
+    draw_parameter_errors,
+)
 from brake_hil.virtual_rig.effects import (
     EFFECTS,
     OUT_OF_LIBRARY,
@@ -67,24 +84,6 @@ from brake_hil.virtual_rig.family_b import (
 from brake_hil.virtual_rig.family_c import EFFECTS_C, FAMILY_C, OUTSIDE_C, MeasurementChainC
 from brake_hil.virtual_rig.rig_yaml import rig_to_mapping, rig_with_values, write_rig
 from brake_hil.virtual_rig.simulator import simulate_rig
-
-PERTURBED_KEYS = (
-    "caliper.stiffness",
-    "caliper.mass",
-    "block.stiffness",
-    "needle_valve.resistance",
-    "seal.youngs_modulus",
-    "seal.shear_length",
-    "seal.friction_coefficient",
-    "seal.loss_factor",
-    "bore_friction_coefficient",
-    "fluid.viscosity",
-    "fluid.bulk_modulus",
-    "fluid.air_fraction",
-    "hose.youngs_modulus",
-)
-"""Rig values that differ between nominal and truth (the catalogue-grade ones; geometry is
-taken as measured)."""
 
 FAMILIES = ("a", FAMILY_B, FAMILY_C)
 """The families of truth laws a case can be made of (``a``: the registered laws; ``c``: the
@@ -151,7 +150,7 @@ class CaseSpec:
     """What one case holds (the label) before it is simulated."""
 
     number: int
-    kind: str  # null, single, pair or unexplained
+    kind: str  # null, single, pair, unexplained, out_of_tolerance or more_air
     strength_class: str  # none (null), subtle, strong, or mixed (a pair of both)
     effects: tuple[Effect, ...]
     nominal_key: str  # which of the nominal rigs
@@ -159,6 +158,10 @@ class CaseSpec:
     air_driven: bool = False
     noise_seed: int = 0
     family: str = "a"  # the family of truth laws (FAMILIES)
+    span: str = "contract"  # how the parameter errors were drawn (draws.SPANS)
+    air: str = ""  # null: degassed or rig_file; more_air: more; else the rig file's
+    rig_air: str = "linearised"  # the law of the rig's own air (plant.RIG_AIR_LAWS)
+    off_key: str = ""  # out_of_tolerance: the rig value far off
 
     @property
     def case_id(self) -> str:
@@ -216,13 +219,13 @@ def _library(family: str) -> tuple[list[str], list[str]]:
 
 
 def _schedule(
-    count: int, seed: int, family: str = "a"
+    count: int, seed: int, family: str = "a", extra: tuple[str, ...] = ()
 ) -> Iterator[tuple[str, tuple[str, ...], tuple[str, ...]]]:
     """(kind, effect names, strength classes) for each case, covering every kind early.
 
     Per round of ``2 * E + 2 + 4 + 2`` cases (``E`` effects): two null cases, each effect
     once subtle and once strong (subtle first for half of them), four pairs, and one subtle
-    and one strong out-of-library case.
+    and one strong out-of-library case; then one case of each ``extra`` kind (no effect).
     """
     names, outside = _library(family)
     rng = np.random.default_rng([seed, 1_000_003, *_FAMILY_STREAM[family]])
@@ -246,6 +249,7 @@ def _schedule(
             ("unexplained", (outside[int(rng.integers(len(outside)))],), (c,))
             for c in ("subtle", "strong")
         ]
+        round_ += [(kind, (), ()) for kind in extra]
         for item in round_:
             if produced == count:
                 return
@@ -269,17 +273,6 @@ def _draw_effect(
     return effect_class(name).draw(rng, strength)
 
 
-def draw_parameter_errors(
-    nominal: Rig, rng: np.random.Generator, error_scale: float = 1.0
-) -> dict[str, float]:
-    """Relative errors ``truth / nominal - 1`` per ``PERTURBED_KEYS``, within one sigma."""
-    errors = {}
-    for key in PERTURBED_KEYS:
-        sigma = nominal.tolerance(key) * error_scale
-        errors[key] = float(np.round(np.clip(rng.normal(0.0, 0.5 * sigma), -sigma, sigma), 4))
-    return errors
-
-
 def truth_rig(nominal: Rig, errors: dict[str, float], name: str) -> Rig:
     """The nominal rig with each dotted value multiplied by ``1 + error``."""
     document = rig_to_mapping(nominal)["rig"]
@@ -292,6 +285,39 @@ def truth_rig(nominal: Rig, errors: dict[str, float], name: str) -> Rig:
     return rig_with_values(nominal, values, name=name)
 
 
+NEW_KINDS = ("out_of_tolerance", "more_air")
+"""The kinds only the ``contract`` span's schedule holds (one each per round)."""
+KINDS = ("null", "single", "pair", "unexplained", *NEW_KINDS)
+"""Every kind of case (see the module docstring)."""
+DEGASSED_AIR_FRACTION = 1e-6
+"""``fluid.air_fraction`` of a degassed null case, in its rig file and its truth."""
+
+
+def _check_span(span: str) -> None:
+    if span not in SPANS:
+        raise EffectError(f"unknown span of parameter errors {span!r} (known: {', '.join(SPANS)})")
+
+
+def _contract_fields(
+    kind: str, nominal: Rig, rng: np.random.Generator, errors: dict[str, float], nulls: int
+) -> dict[str, Any]:
+    """What the ``contract`` span adds to a case: its air, air law and far value, if any.
+
+    Drawn after every draw the ``seed`` span makes, so those stay as they were.
+    """
+    if kind == "null":
+        return {"air": ("degassed", "rig_file")[nulls % 2], "rig_air": "instantaneous"}
+    if kind == "out_of_tolerance":
+        key, error = draw_out_of_tolerance(nominal, rng)
+        errors[key] = error
+        return {"air": "rig_file", "rig_air": "instantaneous", "off_key": key}
+    if kind == "more_air":
+        ratio = float(np.round(rng.uniform(*MORE_AIR_RATIOS), 4))
+        errors["fluid.air_fraction"] = ratio - 1.0
+        return {"air": "more", "rig_air": "instantaneous"}
+    return {}
+
+
 def plan_cases(
     count: int,
     seed: int,
@@ -300,22 +326,35 @@ def plan_cases(
     error_scale: float = 1.0,
     air_driven_share: float = 0.25,
     family: str = "a",
+    span: str = "contract",
 ) -> list[CaseSpec]:
     """The labelled cases of ``family``'s truth laws, before simulation (see the module docstring).
 
+    ``span`` (:data:`~brake_hil.virtual_rig.draws.SPANS`): ``contract`` draws every
+    toleranced value and mixes in the new kinds; ``seed`` replays the stored sets.
+
     Raises:
-        EffectError: an unknown family.
+        EffectError: an unknown family or span.
     """
     _check_family(family)
+    _check_span(span)
     rigs = nominal_rigs()
-    specs = []
-    for number, (kind, names, classes) in enumerate(_schedule(count, seed, family)):
+    extra = NEW_KINDS if span == "contract" else ()
+    specs: list[CaseSpec] = []
+    for number, (kind, names, classes) in enumerate(_schedule(count, seed, family, extra)):
         rng = np.random.default_rng([seed, number, *_FAMILY_STREAM[family]])
         nominal_key = str(rng.choice(list(nominal_keys)))
         effects = tuple(_draw_effect(n, c, rng, family) for n, c in zip(names, classes))
         strength_class = "none" if not classes else classes[0]
         if len(set(classes)) > 1:
             strength_class = "mixed"
+        errors = draw_parameter_errors(rigs[nominal_key], rng, error_scale, span)
+        air_driven = bool(rng.uniform() < air_driven_share)
+        noise_seed = int(rng.integers(0, 2**31 - 1))
+        fields: dict[str, Any] = {}
+        if span == "contract":
+            nulls = sum(spec.kind == "null" for spec in specs)
+            fields = _contract_fields(kind, rigs[nominal_key], rng, errors, nulls)
         specs.append(
             CaseSpec(
                 number=number,
@@ -323,10 +362,12 @@ def plan_cases(
                 strength_class=strength_class,
                 effects=effects,
                 nominal_key=nominal_key,
-                parameter_errors=draw_parameter_errors(rigs[nominal_key], rng, error_scale),
-                air_driven=bool(rng.uniform() < air_driven_share),
-                noise_seed=int(rng.integers(0, 2**31 - 1)),
+                parameter_errors=errors,
+                air_driven=air_driven,
+                noise_seed=noise_seed,
                 family=family,
+                span=span,
+                **fields,
             )
         )
     return specs
@@ -339,21 +380,26 @@ def select_cases(
     *,
     error_scale: float = 1.0,
     family: str = "a",
+    span: str = "contract",
 ) -> list[CaseSpec]:
     """The first ``count`` cases of the schedule whose kind is one of ``kinds`` (all: empty).
 
     A kept case is the very case of that number in ``family``'s full schedule.
 
     Raises:
-        EffectError: an unknown family.
+        EffectError: an unknown family or span, or a kind the span's schedule never holds.
     """
+    if missing := [k for k in kinds if k in NEW_KINDS and span != "contract"]:
+        raise EffectError(f"kind {missing[0]} is made only with the contract span")
+    if unknown := [k for k in kinds if k not in KINDS]:
+        raise EffectError(f"unknown kind {unknown[0]!r} (known: {', '.join(KINDS)})")
     planned = count
-    specs = plan_cases(planned, seed, error_scale=error_scale, family=family)
+    specs = plan_cases(planned, seed, error_scale=error_scale, family=family, span=span)
     if not kinds:
         return specs
     while sum(spec.kind in kinds for spec in specs) < count:
         planned *= 2
-        specs = plan_cases(planned, seed, error_scale=error_scale, family=family)
+        specs = plan_cases(planned, seed, error_scale=error_scale, family=family, span=span)
     return [spec for spec in specs if spec.kind in kinds][:count]
 
 
@@ -386,6 +432,19 @@ def measurement_chain(spec: CaseSpec) -> tuple[Effect, ...]:
     return ()
 
 
+def _contract_label(spec: CaseSpec) -> dict[str, Any]:
+    """The label's span, air law, and the new kinds' ``air``, ``key`` and ``ratio``."""
+    result: dict[str, Any] = {"span": spec.span, "rig_air": spec.rig_air}
+    if spec.air:
+        result["air"] = spec.air
+    if spec.kind == "out_of_tolerance":
+        result["key"] = spec.off_key
+        result["ratio"] = round(1.0 + spec.parameter_errors[spec.off_key], 6)
+    if spec.kind == "more_air":
+        result["ratio"] = round(1.0 + spec.parameter_errors["fluid.air_fraction"], 6)
+    return result
+
+
 def label(spec: CaseSpec, truth: Rig, excitation: Excitation) -> dict[str, Any]:
     """The JSON label of one case."""
     result = {
@@ -405,20 +464,30 @@ def label(spec: CaseSpec, truth: Rig, excitation: Excitation) -> dict[str, Any]:
         "air_driven": spec.air_driven,
         "noise_seed": spec.noise_seed,
     }
+    result.update(_contract_label(spec))
     if chain := measurement_chain(spec):
         result["measurement_chain"] = [{"name": c.name, "parameters": c.values()} for c in chain]
     return result
+
+
+def case_nominal(spec: CaseSpec, drive: CaseDrive = SEED_DRIVE) -> Rig:
+    """The rig file of the case: the nominal rig at the drive's pulsing, degassed if so."""
+    nominal = drive.nominal(nominal_rigs()[spec.nominal_key])
+    if spec.air == "degassed":
+        degassed = {"fluid.air_fraction": DEGASSED_AIR_FRACTION}
+        return rig_with_values(nominal, degassed, name=f"{nominal.name}, degassed")
+    return nominal
 
 
 def make_case(
     spec: CaseSpec, cases_dir: Path, pulsing_s: float, drive: CaseDrive = SEED_DRIVE
 ) -> dict[str, Any]:
     """Simulate and write one case; return its label."""
-    nominal = drive.nominal(nominal_rigs()[spec.nominal_key])
+    nominal = case_nominal(spec, drive)
     truth = truth_rig(nominal, spec.parameter_errors, f"truth of case {spec.case_id}")
     excitation = case_excitation(spec, truth, pulsing_s, drive.max_pressures)
     effects = (*spec.effects, *measurement_chain(spec))
-    run = simulate_rig(truth, effects, excitation, seed=spec.noise_seed)
+    run = simulate_rig(truth, effects, excitation, rig_air=spec.rig_air, seed=spec.noise_seed)
     folder = cases_dir / spec.case_id
     folder.mkdir(parents=True, exist_ok=False)
     write_run(run, folder / "recording")
@@ -439,6 +508,7 @@ def write_labels(
     kinds: Sequence[str],
     family: str = "a",
     drive: CaseDrive = SEED_DRIVE,
+    span: str = "contract",
 ) -> Path:
     """Write ``out/labels.json``: how the cases were made and each case's label.
 
@@ -452,6 +522,7 @@ def write_labels(
         kinds: the kinds kept (empty: every kind).
         family: the family of truth laws the cases were made of.
         drive: how the cases were driven (pulsing frequency, maximum pressures).
+        span: how the parameter errors were drawn (``contract`` or ``seed``).
 
     Returns:
         The path of ``labels.json``.
@@ -465,6 +536,7 @@ def write_labels(
             "error_scale": error_scale,
             "kinds": list(kinds),
             "family": family,
+            "span": span,
             **drive.as_dict(next(iter(nominal_rigs().values())).excitation_hz),
             "layout": "cases/NNN/recording (rosbag2 MCAP) + cases/NNN/rig.yaml (nominal)",
         },

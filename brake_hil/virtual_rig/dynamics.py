@@ -31,6 +31,11 @@ from brake_hil.virtual_rig.plant import Plant
 __all__ = ["LOWEST_OPERATING_PRESSURE", "Dynamics", "ProgressCallback"]
 
 LOWEST_OPERATING_PRESSURE = 1.0e3  # Pa, as parameters.effective_bulk_modulus floors it
+LOWEST_AIR_PRESSURE = 1.01325e5
+"""Pa (one atmosphere): below it (gauge) the instantaneous air law is held at its value here.
+
+Eq. 18's isothermal air modulus is the gauge pressure, singular at 0 Pa; the rig only passes
+through such pressures on the first ramp, never while pulsing."""
 _JACOBIAN_STEP = 1.5e-8  # relative finite-difference step on the scaled states
 _NO_STATES = slice(0, 0)  # a law's own states when it has none
 
@@ -173,6 +178,10 @@ class Dynamics:
             (1.0 - fluid.air_fraction) / fluid.bulk_modulus
             + fluid.air_fraction / np.maximum(operating, LOWEST_OPERATING_PRESSURE),
         )
+        # the instantaneous law: liquid per unit volume, and the air at each chamber's pressure
+        self.instantaneous_air = plant.rig_air == "instantaneous"
+        self.liquid_compliance = (1.0 - fluid.air_fraction) / fluid.bulk_modulus
+        self.air_fraction = fluid.air_fraction
         # eq. 18's wall terms, per unit volume
         self.wall_compliance = sum(
             line.diameter / (line.wall * line.youngs_modulus) for line in (rig.hard_pipe, rig.hose)
@@ -226,15 +235,20 @@ class Dynamics:
         params = self.plant.params
         derivative: list[Signal] = [0.0] * self.size
         viscosity, modulus, valve_factor = self._drift(t)
-        fluid = self.fluid_compliance(t)
         p_i = self._master_piston(self.drive(t), x, derivative)
         p_b, flow = x[self.i_pb], x[self.i_q0]
+        fluid = self._fluid(t, p_b)
         derivative[self.i_q0], derivative[self.line_states], into_bore, bore_extra = self._line(
             p_i, p_b, flow, (viscosity, valve_factor), fluid, x
         )
         if self.air_driven:  # master-cylinder chamber (21b)
+            master_fluid = self._fluid(t, p_i)
             master_c = self._chamber(
-                self.plant.master_volume, self.master_compliance_override, p_i, fluid, 0.0 * fluid
+                self.plant.master_volume,
+                self.master_compliance_override,
+                p_i,
+                master_fluid,
+                0.0 * master_fluid,
             )
             derivative[self.i_pi] = (params.master_area * x[self.i_vi] - flow) / master_c
         # seals, piston-bore forces, piston and caliper (21d-f)
@@ -284,6 +298,24 @@ class Dynamics:
         for law, own in self.internals:
             auxiliary.update(law.internals(t, x[own]))
         return derivative, auxiliary
+
+    def _fluid(self, t: Signal, pressure: Signal) -> Signal:
+        """Fluid and the rig's own air per unit volume (1/Pa, eq. 18) in a chamber at ``pressure``.
+
+        Linearised: the air isothermal at the operating pressure (a schedule over ``t``).
+        Instantaneous: isothermal at ``pressure`` (Pa, gauge, held at
+        :data:`LOWEST_AIR_PRESSURE` below it), ``j_a / p``: the air's share of the volume
+        stays ``j_a`` and its modulus is the pressure at each instant, so within a pulsing
+        cycle the compliance swings by ``1/(1 - a)`` to ``1/(1 + a)`` of the linearised one
+        (``a`` the relative pulsing amplitude) while its cycle mean stays within
+        ``1/sqrt(1 - a^2) - 1`` of it (4 % at the seed's pulsing).
+        """
+        if not self.instantaneous_air:
+            return self.fluid_compliance(t)
+        if isinstance(pressure, float):
+            return self.liquid_compliance + self.air_fraction / max(pressure, LOWEST_AIR_PRESSURE)
+        floored = np.maximum(pressure, LOWEST_AIR_PRESSURE)
+        return self.liquid_compliance + self.air_fraction / floored
 
     def _drift(self, t: Signal) -> tuple[Signal, Signal, Signal]:
         """The viscosity, seal-modulus and valve factors (-) at ``t``: the laws' product."""

@@ -28,7 +28,8 @@ from brake_hil import __version__
 from brake_hil.physics.excitation import SEED_MAX_PRESSURES
 from brake_hil.physics.rig import Rig
 from brake_hil.virtual_rig.bag import write_run
-from brake_hil.virtual_rig.cases import draw_parameter_errors, nominal_rigs, truth_rig
+from brake_hil.virtual_rig.cases import nominal_rigs, truth_rig
+from brake_hil.virtual_rig.draws import draw_parameter_errors
 from brake_hil.virtual_rig.effects import Effect, make_effect
 from brake_hil.virtual_rig.excitation import seed_pulsing
 from brake_hil.virtual_rig.rig_yaml import rig_with_values
@@ -93,8 +94,8 @@ def plan_fleet(runs: int = 30, seed: int = 0) -> list[FleetRun]:
     rigs = nominal_rigs()
     plan = []
     for rig_index, (name, (nominal_key, story)) in enumerate(FLEET_RIGS.items()):
-        errors = draw_parameter_errors(
-            rigs[nominal_key], np.random.default_rng([seed, rig_index]), _ERROR_SCALE
+        errors = draw_parameter_errors(  # the lab's own stored draw, unchanged
+            rigs[nominal_key], np.random.default_rng([seed, rig_index]), _ERROR_SCALE, "seed"
         )
         for run in range(runs):
             rng = np.random.default_rng([seed, rig_index, run + 1])

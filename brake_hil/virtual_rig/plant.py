@@ -25,7 +25,13 @@ from brake_hil.physics.rig import Rig
 from brake_hil.virtual_rig.effects.base import Effect, EffectError
 from brake_hil.virtual_rig.laws import LtiPlant, TruthLaw, check_ports
 
-__all__ = ["Plant", "base_plant", "build_plant"]
+__all__ = ["RIG_AIR_LAWS", "Plant", "base_plant", "build_plant"]
+
+RIG_AIR_LAWS = ("linearised", "instantaneous")
+"""How the rig's own air (``fluid.air_fraction``, eq. 18) is integrated: isothermal at the
+operating pressure (``linearised``, eq. 18 as the LTI model has it) or isothermal at each
+chamber's instantaneous pressure (``instantaneous``, as on a real rig: its compliance follows
+the pressure within each cycle). Either is the rig itself, never an effect."""
 
 
 @dataclass(frozen=True)
@@ -34,6 +40,7 @@ class Plant(LtiPlant):
 
     laws: tuple[TruthLaw, ...] = ()  # the installed truth laws, in installation order
     effects: tuple[Effect, ...] = ()  # the active effects, in the order given
+    rig_air: str = "linearised"  # the rig's own air law (RIG_AIR_LAWS)
 
 
 def base_plant(
@@ -77,13 +84,20 @@ def build_plant(
     effects: Sequence[Effect] = (),
     operating_pressure: float = DEFAULT_MEAN_PRESSURE,
     master_damping_ratio: float = 0.0,
+    rig_air: str = "linearised",
 ) -> Plant:
     """The truth plant: :func:`base_plant` with every active effect installed.
 
+    ``rig_air`` is the law of the rig's own air (:data:`RIG_AIR_LAWS`).
+
     Raises:
-        EffectError: an effect is named twice, or two effects' laws replace the same part
-            of the rig.
+        EffectError: an effect is named twice, two effects' laws replace the same part
+            of the rig, or an unknown air law.
     """
+    if rig_air not in RIG_AIR_LAWS:
+        raise EffectError(
+            f"unknown law of the rig's own air {rig_air!r} (known: {', '.join(RIG_AIR_LAWS)})"
+        )
     names = [effect.name for effect in effects]
     if twice := sorted({name for name in names if names.count(name) > 1}):
         raise EffectError(f"effect {twice[0]} is given more than once")
@@ -92,4 +106,4 @@ def build_plant(
     installed = [(effect.name, effect.install(plant)) for effect in active]
     laws = tuple(law for _, law in installed if law is not None)
     check_ports(laws, [name for name, law in installed if law is not None])
-    return replace(plant, laws=laws, effects=active)
+    return replace(plant, laws=laws, effects=active, rig_air=rig_air)

@@ -189,6 +189,7 @@ def simulate_rig(
     *,
     operating_pressure: float | None = None,
     master_damping_ratio: float = MASTER_DAMPING_RATIO,
+    rig_air: str = "linearised",
     seed: int = 0,
     rtol: float = RELATIVE_TOLERANCE,
     max_step: float = MAX_STEP,
@@ -202,11 +203,12 @@ def simulate_rig(
         effects: the physics the LTI model leaves out, each at its strength; none gives the
             LTI model's answer (to the solver's tolerance).
         excitation: the input; default :func:`~brake_hil.virtual_rig.excitation.seed_pulsing`.
-        operating_pressure: the mean master-cylinder pressure (Pa) at which the rig's own
-            air is isothermal (eq. 18); ``None`` follows the moving mean of ``p_i`` over one
-            excitation period.
+        operating_pressure: mean ``p_i`` (Pa) at which the linearised air is isothermal
+            (eq. 18); ``None``: the moving mean of ``p_i`` over one excitation period.
         master_damping_ratio: damping ratio of the master piston (air-driven runs); eq. 21a
             has none, which leaves a ~270 Hz mode undamped. 0 reproduces eq. 21a exactly.
+        rig_air: the rig's own air (``plant.RIG_AIR_LAWS``): ``linearised`` at the operating
+            pressure (eq. 18), or ``instantaneous``, at each chamber's pressure (a real rig's).
         seed: seed of the sensor noise.
         rtol: relative tolerance; the absolute tolerance is ``min(rtol, 1e-6)`` on the
             scaled states (Pa / 1e6, m / 1e-5, ...).
@@ -229,6 +231,7 @@ def simulate_rig(
         effects,
         max(mean_pressure, LOWEST_OPERATING_PRESSURE),
         master_damping_ratio if excitation.air_driven else 0.0,
+        rig_air,
     )
     dynamics = Dynamics(plant, excitation, schedule)
     dynamics.progress = progress

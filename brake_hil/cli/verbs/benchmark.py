@@ -22,7 +22,21 @@ _ROWS = (
     ("top-1 accuracy, single effects", "top1_accuracy_single", "single_effect_cases"),
     ("exact-set accuracy, pairs", "exact_set_accuracy_pairs", "pair_cases"),
     ("false-positive rate, null cases", "false_positive_rate_null", "null_cases"),
+    ("  degassed nulls", "false_positive_rate_null_degassed", "null_cases_degassed"),
+    (
+        "  nulls with the rig file's air",
+        "false_positive_rate_null_rig_file",
+        "null_cases_rig_file",
+    ),
+    ("rig value far off, null cases", "null_rig_value_alarm_rate", "null_cases"),
     ("unexplained recall", "unexplained_recall", "unexplained_cases"),
+    ("out-of-tolerance value found", "out_of_tolerance_found", "out_of_tolerance_cases"),
+    ("more-air recall", "more_air_recall", "more_air_cases"),
+    (
+        "'more air', nulls with rig file's air",
+        "more_air_false_alarm_rate_rig_file_nulls",
+        "null_cases_rig_file",
+    ),
 )
 """The shares printed: their label, figure and the count of cases they are over."""
 
@@ -41,6 +55,12 @@ class BenchmarkVerb(Verb):
         parser.add_argument("directory", type=Path, help="made by 'brake-hil cases'")
         add_workers_arguments(parser)
         parser.add_argument("--json", type=Path, help="also write the figures here as JSON")
+        parser.add_argument(
+            "--keep",
+            type=Path,
+            metavar="DIR",
+            help="write each case's diagnosis.json to DIR/<case>/ (a new or empty folder)",
+        )
 
     def main(self, args: argparse.Namespace) -> int:
         """0, or 1 when the diagnosis failed on a case (an internal error)."""
@@ -67,7 +87,7 @@ class BenchmarkVerb(Verb):
             count = case_count(args.directory)
             if count and (args.directory / "labels.json").is_file():
                 start()
-            result = run_benchmark(args.directory, workers, args.json, show)
+            result = run_benchmark(args.directory, workers, args.json, show, args.keep)
         print_figures(result.figures)
         json_written(result.json_path)
         failed = [r.case for r in result.results if r.error.startswith(INTERNAL_ERROR)]
@@ -83,17 +103,33 @@ class BenchmarkVerb(Verb):
 
 
 def print_figures(figures: dict[str, object]) -> None:
-    """The figures of :func:`~brake_hil.app.benchmark.score`, one a line, then reliability."""
+    """The figures of :func:`~brake_hil.app.benchmark.score`, one a line, then reliability.
+
+    Then, when the set holds more than one family of truth laws, each family's.
+    """
+    _print_block(figures)
+    mean = _figure(figures["seconds_per_recording_mean"], 1.0, "6.1f")
+    most = _figure(figures["seconds_per_recording_max"], 1.0, ".1f")
+    print(f"{'seconds per recording, mean / max':40s}{mean} / {most}")
+    families = figures.get("by_family") or {}
+    if len(families) > 1:  # type: ignore[arg-type]
+        for family, block in families.items():  # type: ignore[attr-defined]
+            print(f"-- family {family}")
+            _print_block(block)
+
+
+def _print_block(figures: dict[str, object]) -> None:
+    """One block of figures (all cases, or one family's)."""
     for text, key, cases_key in _ROWS:
         share = _figure(figures[key], 100.0, "6.1f", " %")
         print(f"{text:40s}{share}  of {figures[cases_key]} cases")
     improvement = _figure(figures["held_out_nrmse_improvement_median"], 1.0, "6.2f", " x")
     print(f"{'held-out NRMSE improvement, median':40s}{improvement}")
-    mean = _figure(figures["seconds_per_recording_mean"], 1.0, "6.1f")
-    most = _figure(figures["seconds_per_recording_max"], 1.0, ".1f")
-    print(f"{'seconds per recording, mean / max':40s}{mean} / {most}")
     wrong = _figure(figures["wrong_share_of_sure_verdicts"], 100.0, "6.1f", " %")
-    print(f"{'wrong among verdicts at >= 0.9':40s}{wrong}  of {figures['sure_verdicts']} verdicts")
+    print(
+        f"{'wrong among verdicts at >= 0.9':40s}{wrong}  "
+        f"({figures['wrong_sure_count']} of {figures['sure_verdicts']} verdicts)"
+    )
     print("confidence     cases  mean  right")
     for row in figures["reliability"]:  # type: ignore[attr-defined]
         low, high = row["confidence"]

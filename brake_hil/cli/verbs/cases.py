@@ -40,9 +40,18 @@ class CasesVerb(Verb):
         parser.add_argument(
             "--kind",
             action="append",
-            choices=("null", "single", "pair", "unexplained"),
+            choices=("null", "single", "pair", "unexplained", "out_of_tolerance", "more_air"),
             default=[],
-            help="keep only cases of this kind (repeatable; default: every kind)",
+            help="keep only cases of this kind (repeatable; default: every kind; "
+            "out_of_tolerance and more_air need --span contract)",
+        )
+        parser.add_argument(
+            "--span",
+            choices=("contract", "seed"),
+            default="contract",
+            help="how the truth rigs differ from their files: contract (default: every "
+            "toleranced value uniform within its tolerance, with and without air) or seed "
+            "(the draw of the stored sets, to replay them)",
         )
         parser.add_argument(
             "--family",
@@ -85,6 +94,7 @@ class CasesVerb(Verb):
                 kinds=tuple(args.kind),
                 family=args.family,
                 drive=case_drive(args),
+                span=args.span,
             )
             result = run_cases(
                 args.out, args.count, args.seed, options, workers=workers, progress=progress
