@@ -89,14 +89,7 @@ STAND_IN_MARGIN = 0.0
 When a better-scoring hypothesis failed a physics check, or the single named carries another
 physics in its own values (``Candidate.not_alone``): confidence at most about 0.71, and said
 in words, not as a measured number, when the cap binds (``Verdict.capped``). A single a pair
-betters (``HIDDEN_PARTNER_RATIO``) is charged that rule's own margin instead.
-Evidence: docs/diagnosis.md.
-"""
-HIDDEN_PARTNER_RATIO = 1.4
-"""Cut of a single's leftover by a pair with it above which the single is not sure to be alone.
-
-A subtle second effect under a strong one, or a part of the single's physics its model does
-not follow; asked only while the single leaves more than ``NOISE_EXCESS`` noise shares.
+betters (``Summary.hidden_partner``) is charged that pair's log odds instead.
 Evidence: docs/diagnosis.md.
 """
 CHECK_ROUNDS = 3
@@ -117,3 +110,10 @@ CONFIDENCE_OFFSET = 0.9
 
 Evidence: docs/diagnosis.md.
 """
+EFFECTIVE_SAMPLES = 10.0
+"""Effectively independent held-out samples of a recording, for the posterior (posterior.py).
+
+The one constant the confidence is calibrated by (docs/diagnosis.md).
+"""
+FORM_PARAMETERS = 4
+"""Parameters charged to the best generic form of the misfit (``unexplained``'s hypothesis)."""
