@@ -2,10 +2,11 @@
 
 Each hypothesis (none: the calibrated baseline; each single; each pair; ``unexplained``: the
 best generic form of the baseline's misfit) is scored by its held-out log-likelihood under a
-Gaussian residual of unknown variance, ``-n/2 log(cost)``, less a charge of ``1/2 log n`` per
-fitted parameter (the Bayesian information criterion), where ``n`` is the number of
+Gaussian residual of unknown variance, ``-n/2 log(cost)``, where ``n`` is the number of
 effectively independent held-out samples (``EFFECTIVE_SAMPLES``; the residuals are
-correlated, so far fewer than the samples recorded). A cost under the noise's share
+correlated, so far fewer than the samples recorded), less the Occam factor of its fitted
+parameters (Laplace's approximation: ``PARAMETER_CHARGE`` per parameter, the log of a
+parameter's prior width over the width the recording pins it to). A cost under the noise's share
 (:attr:`.summary.Summary.floor_cost`) counts as that share: no model predicts the held-out
 noise. The posterior share of a hypothesis is its likelihood times its prior over the sum
 of all; the prior gives each kind (none, a single, a pair, unexplained) a quarter, shared
@@ -20,12 +21,12 @@ from dataclasses import dataclass
 import math
 from typing import TYPE_CHECKING
 
-from brake_hil.diagnosis.thresholds import EFFECTIVE_SAMPLES, FORM_PARAMETERS
+from brake_hil.diagnosis.thresholds import EFFECTIVE_SAMPLES, FORM_PARAMETERS, PARAMETER_CHARGE
 
 if TYPE_CHECKING:
     from brake_hil.diagnosis.summary import Hypothesis, Summary
 
-__all__ = ["NONE", "UNEXPLAINED", "Posterior", "log_evidence", "posterior"]
+__all__ = ["NONE", "UNEXPLAINED", "Posterior", "log_evidence", "log_prior", "posterior"]
 
 NONE: tuple[str, ...] = ()
 """The hypothesis that the calibrated baseline explains the recording."""
@@ -34,7 +35,11 @@ UNEXPLAINED: tuple[str, ...] = ("unexplained",)
 
 
 def log_evidence(
-    cost: float, parameters: int, floor: float, samples: float = EFFECTIVE_SAMPLES
+    cost: float,
+    parameters: int,
+    floor: float,
+    samples: float = EFFECTIVE_SAMPLES,
+    charge: float = PARAMETER_CHARGE,
 ) -> float:
     """Held-out log-likelihood of a hypothesis less its parameters' charge (log units).
 
@@ -43,10 +48,21 @@ def log_evidence(
         parameters: the parameters it fits beyond the calibrated baseline's.
         floor: the noise's share of any held-out cost (no model predicts less).
         samples: effectively independent held-out samples.
+        charge: the Occam factor of one parameter (log of its prior width over its
+            posterior width).
     """
-    return -0.5 * samples * math.log(max(cost, floor, 1e-30)) - 0.5 * parameters * math.log(
-        samples
-    )
+    return -0.5 * samples * math.log(max(cost, floor, 1e-30)) - charge * parameters
+
+
+def log_prior(size: int, singles: int) -> float:
+    """Log prior of one hypothesis of ``size`` effects (0: none or unexplained).
+
+    Each kind (none, a single, a pair, unexplained) has a quarter, shared equally among the
+    library's ``singles`` (every one is fitted) and among all pairs of them, whether fitted
+    or not (a pair left unfitted is one the single's fit made unlikely).
+    """
+    shared = {0: 1.0, 1: float(singles), 2: singles * (singles - 1) / 2.0}
+    return math.log(0.25 / max(shared.get(size, 1.0), 1.0))
 
 
 @dataclass(frozen=True)
@@ -68,7 +84,9 @@ class Posterior:
         return max(self.shares, key=lambda e: self.shares[e])
 
 
-def posterior(summary: Summary, samples: float = EFFECTIVE_SAMPLES) -> Posterior:
+def posterior(
+    summary: Summary, samples: float = EFFECTIVE_SAMPLES, charge: float = PARAMETER_CHARGE
+) -> Posterior:
     """The posterior share of each hypothesis of ``summary`` (they sum to one).
 
     A hypothesis that cannot be named (implausible fitted values, or set aside by a physics
@@ -77,33 +95,30 @@ def posterior(summary: Summary, samples: float = EFFECTIVE_SAMPLES) -> Posterior
     """
     floor = summary.floor_cost
     scores: dict[tuple[str, ...], float] = {
-        NONE: log_evidence(summary.baseline_cost, 0, floor, samples)
+        NONE: log_evidence(summary.baseline_cost, 0, floor, samples, charge)
     }
     unnamed = [
         log_evidence(
-            summary.baseline_cost / max(summary.form_gain, 1.0), FORM_PARAMETERS, floor, samples
+            summary.baseline_cost / max(summary.form_gain, 1.0),
+            FORM_PARAMETERS,
+            floor,
+            samples,
+            charge,
         )
     ]
     for h in (*summary.singles, *summary.pairs):
-        score = log_evidence(h.held_out_cost, h.parameters, floor, samples)
+        score = log_evidence(h.held_out_cost, h.parameters, floor, samples, charge)
         if _nameable(summary, h):
             scores[h.effects] = score
         else:
             unnamed.append(score)
     scores[UNEXPLAINED] = _log_sum(unnamed)
-    # the prior: each kind (none, a single, a pair, unexplained) a quarter, shared equally
-    # among the library's singles (every one is fitted), and among all pairs of them
-    # whether fitted or not (a pair left unfitted is one the single's fit made unlikely)
-    count = max(len(summary.singles), 1)
-    sizes = {0: 1.0, -1: 1.0, 1: float(count), 2: max(count * (count - 1) / 2.0, 1.0)}
-    scores = {e: s - math.log(sizes[_kind(e)]) for e, s in scores.items()}
+    count = len(summary.singles)
+    scores = {
+        e: s + log_prior(len(e) if e != UNEXPLAINED else 0, count) for e, s in scores.items()
+    }
     total = _log_sum(list(scores.values()))
     return Posterior({e: math.exp(s - total) for e, s in scores.items()})
-
-
-def _kind(effects: tuple[str, ...]) -> int:
-    """0 none, 1 a single, 2 a pair, -1 unexplained."""
-    return -1 if effects == UNEXPLAINED else len(effects)
 
 
 def _nameable(summary: Summary, h: Hypothesis) -> bool:

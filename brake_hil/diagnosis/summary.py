@@ -13,7 +13,7 @@ from typing import Any
 from brake_hil.diagnosis.candidates import candidate, own_columns
 from brake_hil.diagnosis.evidence import Evidence
 from brake_hil.diagnosis.fitting import Fit
-from brake_hil.diagnosis.posterior import log_evidence
+from brake_hil.diagnosis.posterior import log_evidence, log_prior
 from brake_hil.diagnosis.thresholds import NOISE_EXCESS, PAIR_SHARE
 
 __all__ = ["Hypothesis", "Summary", "not_alone", "plausible", "ratio", "summarise"]
@@ -97,11 +97,15 @@ class Summary:
         """Log posterior odds of ``pair`` over ``single`` (:func:`.posterior.log_evidence`).
 
         Positive when the pair's held-out likelihood gain outweighs its extra parameters'
-        charge: the held-out evidence says the second effect is there.
+        charge and its smaller prior: the held-out evidence says the second effect is there.
         """
         floor = self.floor_cost
-        return log_evidence(pair.held_out_cost, pair.parameters, floor) - log_evidence(
-            single.held_out_cost, single.parameters, floor
+        count = len(self.singles)
+        return (
+            log_evidence(pair.held_out_cost, pair.parameters, floor)
+            + log_prior(2, count)
+            - log_evidence(single.held_out_cost, single.parameters, floor)
+            - log_prior(1, count)
         )
 
     def hidden_partner(self, name: str) -> tuple[str | None, float] | None:

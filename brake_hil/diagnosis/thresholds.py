@@ -110,10 +110,17 @@ CONFIDENCE_OFFSET = 0.9
 
 Evidence: docs/diagnosis.md.
 """
-EFFECTIVE_SAMPLES = 10.0
+EFFECTIVE_SAMPLES = 15.0
 """Effectively independent held-out samples of a recording, for the posterior (posterior.py).
 
 The one constant the confidence is calibrated by (docs/diagnosis.md).
+"""
+PARAMETER_CHARGE = 1.2
+"""The Occam factor of one fitted parameter in the posterior (log units; posterior.py).
+
+Laplace's approximation: the log of a parameter's prior width over the width the recording
+pins it to. A candidate's parameter is searched over about two decades and a recording fixes
+it to a few percent of its value: log(100) (docs/diagnosis.md).
 """
 FORM_PARAMETERS = 4
 """Parameters charged to the best generic form of the misfit (``unexplained``'s hypothesis)."""
