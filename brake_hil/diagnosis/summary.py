@@ -13,7 +13,7 @@ from typing import Any
 from brake_hil.diagnosis.candidates import candidate, own_columns
 from brake_hil.diagnosis.evidence import Evidence
 from brake_hil.diagnosis.fitting import Fit
-from brake_hil.diagnosis.posterior import log_evidence, log_prior
+from brake_hil.diagnosis.likelihood import log_evidence, log_prior
 from brake_hil.diagnosis.thresholds import NOISE_EXCESS, PAIR_SHARE
 
 __all__ = ["Hypothesis", "Summary", "not_alone", "plausible", "ratio", "summarise"]

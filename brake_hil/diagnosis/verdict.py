@@ -102,8 +102,8 @@ def unnameable_pairs(baseline: Fit, singles: list[Fit]) -> frozenset[tuple[str, 
     A pair is named only if it cuts the held-out error of the better of its two singles by
     ``PAIR_SHARE`` of the baseline's; no fit has a negative error, so a pair whose better
     single already leaves less than that share cannot be named, whatever its fit. Fitting it
-    could change the verdict's confidence only; :func:`decide` charges its worst case,
-    fitted or not (:attr:`Summary.pairs_ruled_out`), and they are fitted only when
+    could change the verdict's confidence only (its posterior share); unfitted
+    (:attr:`Summary.pairs_ruled_out`), they have no share, and they are fitted when
     :func:`unfitted_pairs_matter`.
     """
     eligible = _ranked_plausible(baseline, singles)
