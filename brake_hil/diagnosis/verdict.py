@@ -64,7 +64,7 @@ class Verdict:
     effects: tuple[str, ...]  # () none, ("unexplained",), or candidate names
     confidence: float
     chosen: tuple[str, ...] | None  # effects of the hypothesis kept as improved model
-    margin: float = math.inf  # the smallest decision margin (log units) the confidence is of
+    margin: float = math.inf  # the smallest decision margin of the rules (log units)
     # Why a rule capped the confidence at a fixed value (``STAND_IN_MARGIN``) below what the
     # evidence gives, in words; None when the confidence is the evidence's own
     capped: str | None = None
