@@ -1,16 +1,20 @@
-"""The diagnosis's confidence fitted on one family of cases and judged on the other.
+"""The verdict's confidence (its posterior share) fitted on one set of cases, judged on others.
 
-Reads the JSON of ``brake-hil benchmark --json`` runs of the virtual rig's family ``a`` and of
-family ``b`` (``brake-hil cases --family``; several runs per family joined by commas),
-replays every verdict from its saved decision inputs (``decide`` is a pure function of
-them) to get its decision margin, and fits the confidence's logistic (right / wrong on the
-margin, ridge 0.01) on one family; then prints the reliability table (bins, cases, mean
-confidence, share right) of that fit on the other family, both ways, of a fit on both, and
-of the shipped constants on each.
+Each set is the decision inputs of diagnosed cases with their truth, one of:
 
-    python3 benchmarks/bench_confidence.py A1.json,A2.json B1.json
+* a ``brake-hil benchmark --json`` file (``per_case``: ``summary`` and ``label``);
+* a folder of ``NNN/diagnosis.json`` (``brake-hil diagnose CASES --out DIR``) with a
+  ``labels.json`` (``brake-hil cases``'s) beside them or given as ``DIR::LABELS``;
+* a diagnosed lab (``RIG/run-NN/diagnosis.json``) given as ``DIR::TRUTH`` with the lab's
+  ``truth.json`` (``brake-hil fleet``).
 
-Prints figures only; exits 2 on a file it cannot read.
+Every verdict is replayed from its saved decision inputs (``decide`` is a pure function of
+them). ``EFFECTIVE_SAMPLES`` is fitted (least log-loss of right/wrong over a grid) on the first
+set; the reliability table of every set is printed for the shipped constant and the fitted one.
+
+    python3 benchmarks/bench_confidence.py FIT_SET CHECK_SET [CHECK_SET ...]
+
+Prints figures only; exits 2 on a set it cannot read.
 """
 
 from __future__ import annotations
@@ -20,102 +24,103 @@ import json
 import math
 from pathlib import Path
 import sys
-
-import numpy as np
-import scipy.optimize
+from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from brake_hil.diagnosis import diagnose as diagnosis  # noqa: E402
-from brake_hil.diagnosis.diagnose import Summary, decide  # noqa: E402
+from brake_hil.diagnosis.posterior import posterior  # noqa: E402
+from brake_hil.diagnosis.summary import Summary  # noqa: E402
+from brake_hil.diagnosis.thresholds import EFFECTIVE_SAMPLES  # noqa: E402
+from brake_hil.diagnosis.verdict import STAND_IN_MARGIN, _confidence, decide  # noqa: E402
 
 BINS = ((0.0, 0.5), (0.5, 0.7), (0.7, 0.8), (0.8, 0.9), (0.9, 0.95), (0.95, 1.01))
-RIDGE = 0.01
+GRID = (5.0, 8.0, 10.0, 12.0, 15.0, 20.0, 25.0, 30.0, 40.0, 60.0)
+Case = tuple[Summary, list[str]]
 
 
-def margins_and_rightness(paths: str) -> tuple[np.ndarray, np.ndarray]:
-    """Each scored case's decision margin (replayed) and whether its verdict was right."""
-    cases = []
-    for name in paths.split(","):
-        path = Path(name)
-        try:
-            cases += json.loads(path.read_text(encoding="utf-8")).get("per_case", [])
-        except (OSError, json.JSONDecodeError, AttributeError) as error:
-            print(f"{path}: cannot read benchmark figures: {error}", file=sys.stderr)
-            raise SystemExit(2) from error
-    margins, right = [], []
-    for case in cases:
-        if case.get("error") or not case.get("summary"):
-            continue
-        verdict = decide(Summary.from_dict(case["summary"]))
-        margins.append(min(verdict.margin, 50.0))
-        right.append(set(verdict.effects) == set(case["label"]))
-    return np.array(margins), np.array(right, dtype=float)
+def read_set(spec: str) -> list[Case]:
+    """The (decision inputs, true effects) of every diagnosed case of a set."""
+    path, _, truth_path = spec.partition("::")
+    root = Path(path)
+    try:
+        if root.is_file():
+            cases = json.loads(root.read_text(encoding="utf-8"))["per_case"]
+            return [
+                (Summary.from_dict(c["summary"]), sorted(c["label"]))
+                for c in cases
+                if c.get("summary") and not c.get("error")
+            ]
+        truth_file = Path(truth_path) if truth_path else root / "labels.json"
+        truth = json.loads(truth_file.read_text(encoding="utf-8"))
+        return _diagnosed(root, truth)
+    except (OSError, KeyError, TypeError, json.JSONDecodeError) as error:
+        print(f"{spec}: cannot read the set: {error}", file=sys.stderr)
+        raise SystemExit(2) from error
 
 
-def fit_logistic(margin: np.ndarray, right: np.ndarray) -> tuple[float, float]:
-    """Slope and offset of P(right) = logistic(slope * margin + offset), ridge ``RIDGE``."""
-
-    def loss(x: np.ndarray) -> float:
-        z = x[0] * margin + x[1]
-        return float(np.sum(np.logaddexp(0.0, -z) * right + np.logaddexp(0.0, z) * (1 - right)))
-
-    result = scipy.optimize.minimize(
-        lambda x: loss(x) + RIDGE * float(x @ x), np.array([1.0, 1.0]), method="BFGS"
-    )
-    return float(result.x[0]), float(result.x[1])
-
-
-def confidence(margin: np.ndarray, slope: float, offset: float) -> np.ndarray:
-    """The logistic of the margin."""
-    return np.asarray(1.0 / (1.0 + np.exp(-(slope * margin + offset))), dtype=float)
+def _diagnosed(root: Path, truth: dict[str, Any]) -> list[Case]:
+    """Cases' labels (``cases``) or a lab's runs (``runs``) joined with their diagnoses."""
+    if "runs" in truth:
+        want = {k: sorted(e["name"] for e in v["effects"]) for k, v in truth["runs"].items()}
+    else:
+        want = {k: sorted(v["expected_effects"]) for k, v in truth["cases"].items()}
+    out = []
+    for key, effects in sorted(want.items()):
+        found = root / key / "diagnosis.json"
+        if found.is_file():
+            document = json.loads(found.read_text(encoding="utf-8"))
+            out.append((Summary.from_dict(document["decision_inputs"]), effects))
+    return out
 
 
-def table(title: str, p: np.ndarray, right: np.ndarray) -> None:
-    """The reliability table and the wrong share of sure (>= 0.9) verdicts."""
-    print(f"\n{title}")
-    print("| confidence | cases | mean confidence | right |")
+def scored(cases: list[Case], samples: float) -> list[tuple[float, bool]]:
+    """Each verdict's confidence at ``samples`` and whether it was right."""
+    out = []
+    for summary, truth in cases:
+        verdict = decide(summary)
+        share = posterior(summary, samples).of(verdict.effects)
+        if verdict.capped is not None:
+            share = min(share, _confidence(STAND_IN_MARGIN))
+        out.append((share, sorted(verdict.effects) == truth))
+    return out
+
+
+def log_loss(rows: list[tuple[float, bool]]) -> float:
+    """Mean negative log-likelihood of right/wrong under the confidences."""
+    terms = [math.log(min(max(p if ok else 1.0 - p, 1e-9), 1.0)) for p, ok in rows]
+    return -sum(terms) / max(len(terms), 1)
+
+
+def table(title: str, rows: list[tuple[float, bool]]) -> None:
+    """The reliability table (markdown) and the wrong share of sure (>= 0.9) verdicts."""
+    right = sum(ok for _, ok in rows)
+    print(f"\n{title}: {len(rows)} verdicts, {right} right, log-loss {log_loss(rows):.3f}")
+    print("| confidence | verdicts | mean confidence | right |")
     print("|---|---|---|---|")
     for low, high in BINS:
-        inside = (p >= low) & (p < high)
-        if inside.any():
-            print(
-                f"| {low:.2f}-{min(high, 1.0):.2f} | {int(inside.sum())} | "
-                f"{float(p[inside].mean()):.3f} | {int(right[inside].sum())} of "
-                f"{int(inside.sum())} ({100 * float(right[inside].mean()):.0f} %) |"
-            )
-    sure = p >= 0.9
-    wrong = int((sure & (right < 0.5)).sum())
-    share = wrong / max(int(sure.sum()), 1)
-    print(f"wrong among sure verdicts (>= 0.9): {wrong} of {int(sure.sum())} ({share:.1%})")
-    log_loss = -float(np.mean(right * np.log(p + 1e-12) + (1 - right) * np.log(1 - p + 1e-12)))
-    print(f"log loss {log_loss:.3f}, accuracy {100 * float(right.mean()):.1f} % of {right.size}")
+        inside = [(p, ok) for p, ok in rows if low <= p < high]
+        if inside:
+            mean = sum(p for p, _ in inside) / len(inside)
+            hits = sum(ok for _, ok in inside)
+            print(f"| {low:.2f}-{min(high, 1.0):.2f} | {len(inside)} | {mean:.2f} | {hits} |")
+    sure = [ok for p, ok in rows if p >= 0.9]
+    print(f"wrong among sure verdicts (>= 0.9): {len(sure) - sum(sure)} of {len(sure)}")
 
 
 def main() -> int:
-    """Fit on each family, judge on the other."""
+    """Fit on the first set, judge on every set."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("family_a", help="benchmark JSON of family a's cases (F1,F2,...)")
-    parser.add_argument("family_b", help="benchmark JSON of family b's cases (F1,F2,...)")
+    parser.add_argument("sets", nargs="+", help="FIT_SET CHECK_SET ... (see the docstring)")
     args = parser.parse_args()
-    data = {"a": margins_and_rightness(args.family_a), "b": margins_and_rightness(args.family_b)}
-    shipped = (diagnosis.CONFIDENCE_SLOPE, diagnosis.CONFIDENCE_OFFSET)
-    for name, (margin, right) in data.items():
-        table(f"shipped constants {shipped} on family {name}", confidence(margin, *shipped), right)
-    both = tuple(np.concatenate([data["a"][k], data["b"][k]]) for k in (0, 1))
-    slope, offset = fit_logistic(*both)
-    print(f"\nfitted on both families: slope {slope:.3f}, offset {offset:.3f}")
-    for fitted_on, judged_on in (("a", "b"), ("b", "a")):
-        slope, offset = fit_logistic(*data[fitted_on])
-        margin, right = data[judged_on]
-        table(
-            f"fitted on family {fitted_on} (slope {slope:.3f}, offset {offset:.3f}), "
-            f"judged on family {judged_on}",
-            confidence(margin, slope, offset),
-            right,
-        )
-    if math.isnan(float(np.mean(data["a"][1]))):
-        return 2
+    sets = {spec: read_set(spec) for spec in args.sets}
+    fit_on = args.sets[0]
+    losses = {n: log_loss(scored(sets[fit_on], n)) for n in GRID}
+    fitted = min(losses, key=lambda n: losses[n])
+    print("log-loss on the fit set: " + ", ".join(f"{n:g}: {v:.3f}" for n, v in losses.items()))
+    print(f"fitted EFFECTIVE_SAMPLES {fitted:g} (shipped {EFFECTIVE_SAMPLES:g})")
+    for spec, cases in sets.items():
+        role = "fit set" if spec == fit_on else "check set"
+        table(f"{spec} ({role}), shipped {EFFECTIVE_SAMPLES:g}", scored(cases, EFFECTIVE_SAMPLES))
     return 0
 
 

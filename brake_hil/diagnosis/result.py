@@ -16,6 +16,7 @@ from brake_hil.diagnosis.evidence import Evidence
 from brake_hil.diagnosis.fitting import Fit, Model
 from brake_hil.diagnosis.improved_model import ImprovedModel
 from brake_hil.diagnosis.physics_checks import CheckOutcome, unidentified
+from brake_hil.diagnosis.posterior import posterior
 from brake_hil.diagnosis.residual_forms import ResidualDescription
 from brake_hil.diagnosis.summary import Summary
 from brake_hil.diagnosis.thresholds import NOISE_EXCESS
@@ -211,9 +212,23 @@ def explain(
             f" How sure: likely, {verdict.capped}; the confidence is that rule's cap, "
             "not a measured one."
         )
+    else:
+        explanation += f" {_how_sure(summary, verdict)}"
     if verdict.effects == ("unexplained",):
         explanation += f" {residual.summary[0].upper()}{residual.summary[1:]}."
     return explanation
+
+
+def _how_sure(summary: Summary, verdict: Verdict) -> str:
+    """The confidence in words: the verdict's posterior share and the next hypothesis's."""
+    shares = posterior(summary).shares
+    own = tuple(verdict.effects)
+    rival = max((e for e in shares if e != own), key=lambda e: shares[e], default=None)
+    text = f"How sure: {verdict.confidence:.2f}, this verdict's share of the posterior"
+    if rival is None:
+        return text + "."
+    name = " + ".join(rival) if rival else "none (the calibrated LTI model)"
+    return text + f"; next, {name} at {shares[rival]:.2f}."
 
 
 def _nothing_named(

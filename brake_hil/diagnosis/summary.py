@@ -13,7 +13,8 @@ from typing import Any
 from brake_hil.diagnosis.candidates import candidate, own_columns
 from brake_hil.diagnosis.evidence import Evidence
 from brake_hil.diagnosis.fitting import Fit
-from brake_hil.diagnosis.thresholds import HIDDEN_PARTNER_RATIO, NOISE_EXCESS, PAIR_SHARE
+from brake_hil.diagnosis.likelihood import log_evidence, log_prior
+from brake_hil.diagnosis.thresholds import NOISE_EXCESS, PAIR_SHARE
 
 __all__ = ["Hypothesis", "Summary", "not_alone", "plausible", "ratio", "summarise"]
 
@@ -63,8 +64,8 @@ class Summary:
         """Why ``effects``, a single, may not be alone; else None.
 
         Its own fitted values show another physics beside it (:attr:`not_alone`), or a
-        pair with it cuts what it leaves ``HIDDEN_PARTNER_RATIO`` times while it leaves
-        more than ``NOISE_EXCESS`` times the noise's share (:meth:`hidden_partner`).
+        pair with it has the larger posterior while it leaves more than ``NOISE_EXCESS``
+        times the noise's share (:meth:`hidden_partner`).
         """
         if len(effects) != 1:
             return None
@@ -92,18 +93,34 @@ class Summary:
         single = next((h for h in self.singles if h.effects == (name,)), None)
         return single is not None and single.held_out_cost > NOISE_EXCESS * self.floor_cost
 
+    def pair_odds(self, single: Hypothesis, pair: Hypothesis) -> float:
+        """Log posterior odds of ``pair`` over ``single`` (:func:`.posterior.log_evidence`).
+
+        Positive when the pair's held-out likelihood gain outweighs its extra parameters'
+        charge and its smaller prior: the held-out evidence says the second effect is there.
+        """
+        floor = self.floor_cost
+        count = len(self.singles)
+        return (
+            log_evidence(pair.held_out_cost, pair.parameters, floor)
+            + log_prior(2, count)
+            - log_evidence(single.held_out_cost, single.parameters, floor)
+            - log_prior(1, count)
+        )
+
     def hidden_partner(self, name: str) -> tuple[str | None, float] | None:
         """The second effect beside single ``name`` and the cut of a pair with it; or None.
 
         The cut is how many times the best pair with ``name`` (plausible, not set aside)
-        cuts the error ``name`` leaves; None unless it is ``HIDDEN_PARTNER_RATIO`` or more.
-        The second effect is named only when its physics checks pass: its own signature is
-        in the evidence (the single's ``consistent``), its values fitted alone are one
-        instance of its physics (not in :attr:`not_alone`), the pair's fitted values describe
-        its physics (``plausible``), and that pair too cuts ``HIDDEN_PARTNER_RATIO`` times;
-        else it is None (a second effect is likely, not identified). Only for a single that
-        leaves more than ``NOISE_EXCESS`` times the noise's share: under that, no second
-        effect is there to find.
+        cuts the error ``name`` leaves; None unless that pair's posterior beats the single's
+        (:meth:`pair_odds` positive: a held-out misfit beyond noise that the pair cuts more
+        than its extra parameters can). The second effect is named only when its physics
+        checks pass: its own signature is in the evidence (the single's ``consistent``), its
+        values fitted alone are one instance of its physics (not in :attr:`not_alone`), the
+        pair's fitted values describe its physics (``plausible``), and that pair too wins
+        over the single; else it is None (a second effect is likely, not identified). Only
+        for a single that leaves more than ``NOISE_EXCESS`` times the noise's share: under
+        that, no second effect is there to find.
         """
         single = next((h for h in self.singles if h.effects == (name,)), None)
         if single is None or not self.leaves_beyond_noise(name):
@@ -111,23 +128,19 @@ class Summary:
         pairs = [
             p
             for p in self.pairs
-            if name in p.effects and p.plausible and "+".join(p.effects) not in self.stand_ins
+            if name in p.effects
+            and p.plausible
+            and "+".join(p.effects) not in self.stand_ins
+            and self.pair_odds(single, p) > 0.0
         ]
         best = min(pairs, key=lambda p: p.held_out_cost, default=None)
         if best is None:
             return None
         cut = ratio(single.held_out_cost, best.held_out_cost)
-        if cut < HIDDEN_PARTNER_RATIO:
-            return None
         # its own fit alone must describe one instance of its physics too (not_alone: a
         # delay whose skew and common lag are a lag of the line, as air's, is not a delay)
         seen = {h.effects[0] for h in self.singles if h.consistent} - set(self.not_alone)
-        shown = [
-            p
-            for p in pairs
-            if all(e in seen for e in p.effects if e != name)
-            and ratio(single.held_out_cost, p.held_out_cost) >= HIDDEN_PARTNER_RATIO
-        ]
+        shown = [p for p in pairs if all(e in seen for e in p.effects if e != name)]
         named = min(shown, key=lambda p: p.held_out_cost, default=None)
         other = None if named is None else next(e for e in named.effects if e != name)
         return other, cut

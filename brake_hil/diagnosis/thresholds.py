@@ -89,14 +89,7 @@ STAND_IN_MARGIN = 0.0
 When a better-scoring hypothesis failed a physics check, or the single named carries another
 physics in its own values (``Candidate.not_alone``): confidence at most about 0.71, and said
 in words, not as a measured number, when the cap binds (``Verdict.capped``). A single a pair
-betters (``HIDDEN_PARTNER_RATIO``) is charged that rule's own margin instead.
-Evidence: docs/diagnosis.md.
-"""
-HIDDEN_PARTNER_RATIO = 1.4
-"""Cut of a single's leftover by a pair with it above which the single is not sure to be alone.
-
-A subtle second effect under a strong one, or a part of the single's physics its model does
-not follow; asked only while the single leaves more than ``NOISE_EXCESS`` noise shares.
+betters (``Summary.hidden_partner``) is charged that pair's log odds instead.
 Evidence: docs/diagnosis.md.
 """
 CHECK_ROUNDS = 3
@@ -107,13 +100,34 @@ PAIR_SHORTLIST = 8
 PAIR_FIT_RATIO = 1.3
 """Pairs are fitted when the best single cuts the held-out error at least this much."""
 CONFIDENCE_SLOPE = 0.85
-"""Slope of the logistic map from the decision margin (log units) to the confidence.
+"""Slope of the logistic map from a decision margin (log units) to a ceiling.
 
-A logistic regression of right/wrong verdicts on their margin over the virtual rig's two
-families (``benchmarks/bench_confidence.py``). Evidence: docs/diagnosis.md.
+Only the ceiling of a capped verdict (``STAND_IN_MARGIN``) is taken from it now: the
+confidence is the posterior share (posterior.py). Evidence: docs/diagnosis.md.
 """
 CONFIDENCE_OFFSET = 0.9
-"""Offset of that logistic map: the confidence at margin 0 is about 0.71.
+"""Offset of that logistic map: the ceiling at margin 0 is about 0.71.
 
 Evidence: docs/diagnosis.md.
+"""
+EFFECTIVE_SAMPLES = 25.0
+"""Effectively independent held-out samples of a recording, for the posterior (posterior.py).
+
+The held-out residuals are correlated over a 5 Hz cycle and across the three channels, so a
+recording's thousands of held-out samples weigh as a few tens. The one constant fitted to
+calibrate the confidence: the log-loss of right/wrong verdicts on a family-a set, checked on
+family b and the virtual lab (docs/diagnosis.md).
+"""
+PARAMETER_CHARGE = 2.3
+"""The Occam factor of one fitted parameter in the posterior (log units; posterior.py).
+
+Laplace's approximation: the log of a parameter's prior width over the width the recording
+pins it to. A candidate's parameter is searched over about a decade or two and a recording
+fixes it to a tenth of that range or better: log(10) (docs/diagnosis.md).
+"""
+FORM_PARAMETERS = 4
+"""Parameters charged to the best generic form of the misfit (``unexplained``'s hypothesis).
+
+The generic forms fit one to four free values to a channel's residual; the most is charged,
+as a candidate's law is charged all of its own.
 """

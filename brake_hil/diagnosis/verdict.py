@@ -6,10 +6,12 @@ docs/diagnosis.md.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 import math
 
 from brake_hil.diagnosis.fitting import Fit
+from brake_hil.diagnosis.posterior import posterior
 from brake_hil.diagnosis.summary import Hypothesis, Summary, plausible, ratio
 from brake_hil.diagnosis.thresholds import (
     ACCEPT_RATIO,
@@ -18,7 +20,6 @@ from brake_hil.diagnosis.thresholds import (
     CONFIDENCE_OFFSET,
     CONFIDENCE_SLOPE,
     FORM_RATIO,
-    HIDDEN_PARTNER_RATIO,
     NOISE_EXCESS,
     PAIR_RATIO,
     PAIR_SHARE,
@@ -38,6 +39,7 @@ __all__ = [
     "Verdict",
     "confidence_text",
     "decide",
+    "decide_effects",
     "fit_gain",
     "fit_score",
     "hypothesis_note",
@@ -62,7 +64,7 @@ class Verdict:
     effects: tuple[str, ...]  # () none, ("unexplained",), or candidate names
     confidence: float
     chosen: tuple[str, ...] | None  # effects of the hypothesis kept as improved model
-    margin: float = math.inf  # the smallest decision margin (log units) the confidence is of
+    margin: float = math.inf  # the smallest decision margin of the rules (log units)
     # Why a rule capped the confidence at a fixed value (``STAND_IN_MARGIN``) below what the
     # evidence gives, in words; None when the confidence is the evidence's own
     capped: str | None = None
@@ -100,8 +102,8 @@ def unnameable_pairs(baseline: Fit, singles: list[Fit]) -> frozenset[tuple[str, 
     A pair is named only if it cuts the held-out error of the better of its two singles by
     ``PAIR_SHARE`` of the baseline's; no fit has a negative error, so a pair whose better
     single already leaves less than that share cannot be named, whatever its fit. Fitting it
-    could change the verdict's confidence only; :func:`decide` charges its worst case,
-    fitted or not (:attr:`Summary.pairs_ruled_out`), and they are fitted only when
+    could change the verdict's confidence only (its posterior share); unfitted
+    (:attr:`Summary.pairs_ruled_out`), they have no share, and they are fitted when
     :func:`unfitted_pairs_matter`.
     """
     eligible = _ranked_plausible(baseline, singles)
@@ -215,6 +217,21 @@ def hypothesis_note(summary: Summary, effects: tuple[str, ...], verdict: Verdict
 
 
 def decide(summary: Summary) -> Verdict:
+    """The verdict of :func:`decide_effects`, sure by its posterior share (:mod:`.posterior`).
+
+    Its confidence is the posterior share of the hypothesis it names (none, a single, a
+    pair, ``unexplained``), calibrated by ``EFFECTIVE_SAMPLES``; a verdict a rule doubts
+    (``capped``: a better fit set aside, a single whose own values show another physics) is
+    said in words and held under that rule's cap.
+    """
+    verdict = decide_effects(summary)
+    share = posterior(summary).of(verdict.effects)
+    if verdict.capped is not None:
+        share = min(share, _confidence(STAND_IN_MARGIN))
+    return dataclasses.replace(verdict, confidence=share)
+
+
+def decide_effects(summary: Summary) -> Verdict:
     """Name the effects from the fitted hypotheses' held-out costs (pure; replayable).
 
     Admissible are the plausible singles, and the plausible pairs that cut the error of the
@@ -346,7 +363,7 @@ def _caps(summary: Summary, standing: _Standing) -> _Caps:
     measured: list[float] = []
     # A single whose own fitted values show another physics beside it (Candidate.not_alone):
     # named alone, no surer than a stand-in's replacement (nothing measures how likely).
-    # One that a pair with it betters (HIDDEN_PARTNER_RATIO): the margin of that rule, the
+    # One that a pair with it betters (Summary.hidden_partner): the pair's log odds, the
     # more the pair cuts its leftover the less sure it is alone.
     if chosen is not None and len(chosen.effects) == 1:
         name = chosen.effects[0]
@@ -354,7 +371,14 @@ def _caps(summary: Summary, standing: _Standing) -> _Caps:
         if name in summary.not_alone:
             fixed.append((STAND_IN_MARGIN, NOT_ALONE))
         if partner is not None:
-            measured.append(math.log(HIDDEN_PARTNER_RATIO / partner[1]))
+            single = next(h for h in summary.singles if h.effects == chosen.effects)
+            measured.append(
+                -max(
+                    summary.pair_odds(single, p)
+                    for p in summary.pairs
+                    if name in p.effects and p.plausible
+                )
+            )
     # Hypotheses that would have been named (before the chosen one) but for a generic form
     # doing as well: the verdict is no surer than the nearest stayed below that bar.
     passing = standing.passing
