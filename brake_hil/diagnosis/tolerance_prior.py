@@ -106,10 +106,13 @@ def _jacobian(
 
 
 def _project(a: FloatArray, b: FloatArray) -> FloatArray:
-    """Multipliers per log rig value: a value whose effect on the coefficients is one
-    multiplier's (parallel columns) is carried by that multiplier alone; the others by the
-    least-squares, least-norm combination (``C_b``'s bore volume, hose wall and air share two
-    rows: the split of what no recording tells apart is the smallest)."""
+    """Multipliers per log rig value (the projection of ``b`` on ``a``'s columns).
+
+    A value whose effect on the coefficients is one multiplier's (parallel columns) is
+    carried by that multiplier alone; the others by the least-squares, least-norm
+    combination (``C_b``'s bore volume, hose wall and air share two rows: the split of what
+    no recording tells apart is the smallest).
+    """
     projection = np.linalg.pinv(a, rcond=1e-6) @ b
     norms = np.linalg.norm(a, axis=0)
     for k in range(b.shape[1]):
