@@ -313,7 +313,7 @@ def fit(model: Model, start: FloatArray | None = None, max_iterations: int = 15)
             )
         except (ValueError, np.linalg.LinAlgError) as error:
             raise FitError(f"{name}: the fit failed: {error}") from error
-    return _scored(model, name, result, search.sigma.size)
+    return _scored(model, name, result, search.whiten.shape[0])
 
 
 class _Search:

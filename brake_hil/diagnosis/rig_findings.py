@@ -21,6 +21,7 @@ pressure, seed eq. 18); the improved model carries it.
 from __future__ import annotations
 
 from collections.abc import Mapping
+import re
 
 import numpy as np
 
@@ -33,6 +34,7 @@ __all__ = [
     "AIR_MORE_RATIO",
     "FLAG_SIGMAS",
     "air_finding",
+    "air_in_words",
     "verdict_notes",
     "air_text",
     "outside",
@@ -51,6 +53,8 @@ says". Recordings with the rig file's own air fit 0.8-1.3 times it and two to th
 the air fits 1.9 times and more (docs/diagnosis.md's figures); 1.6 lies between."""
 ATMOSPHERE = 1.013e5
 """Absolute pressure of gauge zero (Pa), as the entrained_air candidate's."""
+AIR_VALUES = ("entrained_air", "air_fraction", "bore_compliance")
+"""The effect and the calibrated values an air finding is about (the trend's advice)."""
 AS_RIG_FILE = (
     "the air's compliance follows the pressure as the rig file's air would; "
     "the improved model carries it"
@@ -225,3 +229,11 @@ def verdict_notes(verdict: Mapping[str, object]) -> list[str]:
     if isinstance(air, dict) and isinstance(air.get("text"), str):
         notes.append(f"air: {air['text']}")
     return notes
+
+
+def air_in_words(explanation: str) -> str | None:
+    """The air sentence (:func:`air_text`) a verdict's explanation holds, or None."""
+    more = re.search(r"The air: more air than the rig file says \(([0-9.]+) times\)", explanation)
+    if more is not None:
+        return air_text("more_than_rig_file", float(more.group(1)))
+    return AS_RIG_FILE if f"The air: {AS_RIG_FILE}" in explanation else None
