@@ -235,8 +235,9 @@ def calibrate(dataset: Dataset, rig: Rig) -> Calibration:
                 )
             return cache[window.segment]
 
-        data = window_residuals(dataset, dataset.train, predict)
-        return data / (MODEL_ERROR * np.sqrt(samples))
+        data: FloatArray = window_residuals(dataset, dataset.train, predict)
+        scaled: FloatArray = data / (MODEL_ERROR * np.sqrt(samples))
+        return scaled
 
     values = uncertain_values(rig)
     covariance, setters = prior(rig, values)

@@ -91,7 +91,8 @@ def scaled(rig: Rig, key: str, factor: float) -> Rig:
 def log_coefficients(params: tuple[ModelParameters, ...]) -> FloatArray:
     """The log of every row coefficient at each operating pressure, one vector."""
     values = [max(getattr(p, row), 1e-300) for p in params for row in ROWS]
-    return np.log(np.array(values))
+    result: FloatArray = np.log(np.array(values, dtype=float))
+    return result
 
 
 def _jacobian(

@@ -314,18 +314,12 @@ def rig_trend(rows: Sequence[DiagnosisRow]) -> RigTrend:
 
 
 def _air_said(series: list[Series], rows: Sequence[DiagnosisRow]) -> list[Series]:
-    """An air finding says which air it is, as the latest verdict that spoke of air said it.
-
-    The rig file's own air (no bleeding) or more than the rig file says (bleed).
-    """
-    spoken = (air_in_words(r.explanation) for r in reversed(rows))
-    said = next((w for w in spoken if w), None)
-    if said is None:
-        return series
+    """An air finding says which air it is (the rig file's own or more), as last said."""
+    said = next(filter(None, (air_in_words(r.explanation) for r in reversed(rows))), None)
     out = []
     for item in series:
         cause = _advice(item.name).cause
-        if item.name in AIR_VALUES and item.finding and item.finding.endswith(cause):
+        if said and item.name in AIR_VALUES and item.finding and item.finding.endswith(cause):
             item = replace(item, finding=f"{item.finding[: -len(cause)]}{said}")
         out.append(item)
     return out
