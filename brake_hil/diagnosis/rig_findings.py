@@ -12,7 +12,9 @@ quantities; a single key at 2 tolerances is 2 off.
 
 The air (``verdict.air``): the air fraction the improved model carries (the calibrated
 fraction, plus the ``entrained_air`` candidate's pressure-following air expressed at the
-recording's mean pressure) against the rig file's. More than ``AIR_MORE_RATIO`` times the rig
+recording's mean pressure) against the rig file's. It is said whenever entrained_air is named,
+or the calibrated fraction is outside its tolerance or surely (two posterior sigmas) above the
+rig file's by more than ``AIR_MORE_RATIO``. More than ``AIR_MORE_RATIO`` times the rig
 file's is more air than it says: bleed the brake. Less is the rig file's own air, whose
 compliance follows the pressure within each cycle (the LTI model linearises it at the mean
 pressure, seed eq. 18); the improved model carries it.
@@ -166,7 +168,11 @@ def air_finding(
     rig_fraction = calibration.rig.fluid.air_fraction
     m = multipliers.get("air_fraction", 1.0)
     sigma = calibration.sigmas.get("air_fraction")
-    far = sigma is not None and outside(m, sigma, calibration.uncertainty.get("air_fraction", 0))
+    posterior = calibration.uncertainty.get("air_fraction", 0.0)
+    far = sigma is not None and (
+        outside(m, sigma, posterior)
+        or (m > AIR_MORE_RATIO and float(np.log(m)) - POSTERIOR_SPAN * posterior > 0.0)
+    )
     if air_share is None and not far:
         return None
     fitted = rig_fraction * m

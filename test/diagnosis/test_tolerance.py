@@ -138,6 +138,8 @@ def test_the_air_as_the_rig_file_says_or_more() -> None:
     assert more["state"] == "more_than_rig_file"
     assert more["text"] == "more air than the rig file says (2.0 times): bleed the brake"
     assert air_finding(calibration, {"air_fraction": 1.2}, None, 1.0e6) is None
+    calibrated = air_finding(calibration, {"air_fraction": 2.5}, None, 1.0e6)  # no candidate
+    assert calibrated is not None and calibrated["state"] == "more_than_rig_file"
     assert 1.3 < AIR_MORE_RATIO < 2.0
 
 
