@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from brake_hil.diagnosis.calibration import BORE_COMPLIANCE, UNCERTAIN
+from brake_hil.diagnosis.calibration import BORE_COMPLIANCE, PROPAGATED, UNCERTAIN
 from brake_hil.physics.catalogue import CATALOGUE
 from brake_hil.results.trend import (
     ADVICE,
@@ -223,7 +223,7 @@ def test_trends_are_one_per_rig_sorted_by_name() -> None:
 
 
 def test_every_calibrated_value_and_effect_has_its_advice() -> None:
-    values = {u.name for u in (*UNCERTAIN, BORE_COMPLIANCE)}
+    values = {u.name for u in (*UNCERTAIN, BORE_COMPLIANCE, *PROPAGATED)}
     assert values | set(CATALOGUE) == set(ADVICE)
 
 
