@@ -12,12 +12,13 @@ with pressure; left out, a 10 % error in it was named hose_compliance on null re
 Every other toleranced rig value that reaches the model (bore length, piston diameter and
 mass, fluid density and bulk modulus, line geometry, caliper mass, block stiffness ...) is
 carried into the prior (:mod:`.tolerance_prior`): the prior of the multipliers is the
-covariance its tolerances give them, and the masses, the block stiffness, the line inertance,
-the piston area and the bore chamber's volume are calibrated too where their tolerance moves the
-recording's fit by more than one prior sigma's worth of data cost (``HOLD_BELOW``); the others
-are held at the rig file's value. So a parameter error within tolerance is not mistaken for
-missing physics, and a mismatch that would need a value far outside its tolerance is left for
-the candidates to explain, or named as that value (:mod:`.rig_findings`).
+covariance its tolerances give them. The bore chamber's volume, the piston area, the masses
+and the block stiffness are calibrated too where their tolerance moves the recording's fit by
+more than one prior sigma's worth of data cost (``HOLD_BELOW``), else held at the rig file's
+value; the line inertance is held (freed, it stood in for the hose's distributed compliance
+and the seals' stick-slip). So a parameter error within tolerance is not mistaken for missing
+physics, and a mismatch that would need a value far outside its tolerance is left for the
+candidates to explain, or named as that value (:mod:`.rig_findings`).
 
 The data term is the mean squared residual of each channel over its peak-to-peak, divided by
 ``MODEL_ERROR**2``: a 0.03 % misfit on one channel weighs as much as one sigma of one parameter.
