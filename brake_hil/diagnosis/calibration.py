@@ -9,16 +9,13 @@ error in it changes the compliance more at low pressure than at high, which one 
 ``C_b`` cannot follow; a rig file that overrides ``C_b`` gets a ``C_b`` multiplier instead),
 and the hose wall's Young's modulus (its swelling is the part of ``C_b`` that does not change
 with pressure; left out, a 10 % error in it was named hose_compliance on null recordings).
-Every other toleranced rig value that reaches the model (bore length, piston diameter and
-mass, fluid density and bulk modulus, line geometry, caliper mass, block stiffness ...) is
-carried into the prior (:mod:`.tolerance_prior`): the prior of the multipliers is the
-covariance its tolerances give them. The bore chamber's volume, the piston area, the masses
-and the block stiffness are calibrated too where their tolerance moves the recording's fit by
-more than one prior sigma's worth of data cost (``HOLD_BELOW``), else held at the rig file's
-value; the line inertance is held (freed, it stood in for the hose's distributed compliance
-and the seals' stick-slip). So a parameter error within tolerance is not mistaken for missing
-physics, and a mismatch that would need a value far outside its tolerance is left for the
-candidates to explain, or named as that value (:mod:`.rig_findings`).
+Every other toleranced rig value that reaches the model (bore length, piston diameter, the
+bore's area ratio, fluid bulk modulus, line geometry, viscosity ...) is carried into the prior
+(:mod:`.tolerance_prior`): the prior of the multipliers is the covariance its tolerances give
+them (the bore's volume widens the hose wall's and the air's priors, which together set
+``C_b``). So a parameter error within tolerance is not mistaken for missing physics, and a
+mismatch that would need a value far outside its tolerance is left for the candidates to
+explain, or named as that value (:mod:`.rig_findings`).
 
 The data term is the mean squared residual of each channel over its peak-to-peak, divided by
 ``MODEL_ERROR**2``: a 0.03 % misfit on one channel weighs as much as one sigma of one parameter.
@@ -66,15 +63,13 @@ UNCERTAIN = (
 )
 BORE_COMPLIANCE = Uncertain("bore_compliance", "fluid.air_fraction", 0.3)
 """Replaces ``air_fraction`` when the rig file overrides ``C_b``."""
-PROPAGATED = (
-    Uncertain("bore_volume", "bore.length", 0.0),
-    Uncertain("piston_area", "pistons.diameter", 0.0),
-    Uncertain("piston_mass", "pistons.mass", 0.0),
-    Uncertain("caliper_mass", "caliper.mass", 0.0),
-    Uncertain("block_stiffness", "block.stiffness", 0.0),
-    # line_inertance: left out, it stood in for the hose ladder and the seal (bundled bags)
-)
-"""Calibrated too when their tolerance matters to the recording (``HOLD_BELOW``)."""
+PROPAGATED: tuple[Uncertain, ...] = ()
+"""Calibrated too when their tolerance matters to the recording (``HOLD_BELOW``): none. Freed,
+the bore chamber's volume (``bore_volume``), the piston area (``piston_area``), the line
+inertance stood in for the hose's distributed compliance (the bundled hose recording came
+out eccentric_load with the bore volume at 1.75 and the piston area at 1.52) and for the seals'
+stick-slip; their rig values' tolerances are carried into the six multipliers' prior instead
+(the bore length into the hose wall's and the air's, which together set ``C_b``)."""
 RIG_VALUES = ("valve_resistance", "air_fraction", "hose_stiffness", "bore_volume", "piston_area")
 """Multipliers applied by hand (the rest multiply ModelParameters fields)."""
 MODEL_KEYS = {

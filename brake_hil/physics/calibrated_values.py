@@ -40,17 +40,5 @@ VALUE_LABELS: Final[Mapping[str, ValueLabel]] = {
     "air_fraction": ValueLabel("fluid air fraction", "air in the fluid: bleed the circuit"),
     "bore_compliance": ValueLabel("bore compliance C_b", "air in the fluid: bleed the circuit"),
     "hose_stiffness": ValueLabel("hose wall modulus", "hose ageing or a new hose"),
-    "bore_volume": ValueLabel(
-        "bore chamber volume", "check the bore length, piston diameter and washers"
-    ),
-    "piston_area": ValueLabel(
-        "piston area", "check the piston diameter and the force transducer's calibration"
-    ),
-    "piston_mass": ValueLabel("piston mass", "check the pistons' mass"),
-    "caliper_mass": ValueLabel("caliper mass", "check the caliper's mass"),
-    "block_stiffness": ValueLabel("block stiffness", "check the block and its mounting"),
-    "line_inertance": ValueLabel(
-        "line inertance", "check the hose and pipe lengths and diameters, the fluid"
-    ),
 }
 """Every value the calibration may fit, by its name (a test holds it to the calibration)."""
