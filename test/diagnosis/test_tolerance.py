@@ -124,6 +124,7 @@ def test_the_air_as_the_rig_file_says_or_more() -> None:
     assert air_finding(calibration, {"air_fraction": 1.2}, None, 1.0e6) is None
     calibrated = air_finding(calibration, {"air_fraction": 2.5}, None, 1.0e6)  # no candidate
     assert calibrated is not None and calibrated["state"] == "more_than_rig_file"
+    assert air_finding(calibration, {"air_fraction": 1.7}, None, 1.0e6) is None  # in its band
     assert 1.3 < AIR_MORE_RATIO < 2.0
 
 
