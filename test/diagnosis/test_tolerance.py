@@ -64,11 +64,12 @@ def test_an_exact_value_adds_nothing_and_an_override_keeps_its_own_tolerance() -
         (1.10, 0.1, 0.01, False),  # at the tolerance's edge: within
         (0.90, 0.1, 0.01, False),
         (0.60, 0.4, 0.01, False),  # the valve at -40 %: within
-        (1.25, 0.1, 0.01, True),  # 2.5 tolerances
+        (2.28, 0.538, 0.01, False),  # k_eh as a contract-spanning null fitted it
+        (1.25, 0.1, 0.01, True),  # 2.2 sigmas
         (0.50, 0.25, 0.01, True),  # k_c at -2 tolerances
-        (1.70, 0.4, 0.01, True),  # the valve at +1.75 tolerances
+        (0.60, 0.2, 0.01, True),  # a bore-volume-like value at -2 tolerances
         (1.25, 0.1, 0.2, False),  # not pinned down by the recording
-        (0.05, 1.0, 0.01, False),  # the air cannot be a tolerance below nothing
+        (0.05, 1.0, 0.01, True),  # the air at a twentieth: 3 sigmas below
     ],
 )
 def test_outside_its_tolerance(
@@ -125,6 +126,7 @@ def test_the_air_as_the_rig_file_says_or_more() -> None:
     calibrated = air_finding(calibration, {"air_fraction": 2.5}, None, 1.0e6)  # no candidate
     assert calibrated is not None and calibrated["state"] == "more_than_rig_file"
     assert air_finding(calibration, {"air_fraction": 1.7}, None, 1.0e6) is None  # in its band
+    assert air_finding(calibration, {"air_fraction": 0.05}, None, 1.0e6) is None  # less air
     assert 1.3 < AIR_MORE_RATIO < 2.0
 
 
