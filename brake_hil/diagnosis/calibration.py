@@ -9,8 +9,13 @@ error in it changes the compliance more at low pressure than at high, which one 
 ``C_b`` cannot follow; a rig file that overrides ``C_b`` gets a ``C_b`` multiplier instead),
 and the hose wall's Young's modulus (its swelling is the part of ``C_b`` that does not change
 with pressure; left out, a 10 % error in it was named hose_compliance on null recordings).
-So a parameter error is not mistaken for missing physics, and a mismatch that would need a
-value far outside its tolerance is left for the candidates to explain.
+Every other toleranced rig value that reaches the model (bore length, piston diameter, the
+bore's area ratio, fluid bulk modulus, line geometry, viscosity ...) is carried into the prior
+(:mod:`.tolerance_prior`): the prior of the multipliers is the covariance its tolerances give
+them (the bore's volume widens the hose wall's and the air's priors, which together set
+``C_b``). So a parameter error within tolerance is not mistaken for missing physics, and a
+mismatch that would need a value far outside its tolerance is left for the candidates to
+explain, or named as that value (:mod:`.rig_findings`).
 
 The data term is the mean squared residual of each channel over its peak-to-peak, divided by
 ``MODEL_ERROR**2``: a 0.03 % misfit on one channel weighs as much as one sigma of one parameter.
@@ -19,13 +24,14 @@ The data term is the mean squared residual of each channel over its peak-to-peak
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import scipy.optimize
 
 from brake_hil.diagnosis.dataset import Dataset, Window
 from brake_hil.diagnosis.engine import ModelSpec, simulate_batch
+from brake_hil.diagnosis.tolerance_prior import KEY_FIELDS, prior_covariance
 from brake_hil.physics.parameters import ModelParameters, derive_parameters
 from brake_hil.physics.rig import Rig
 from brake_hil.topics import OUTPUT_CHANNELS
@@ -57,8 +63,29 @@ UNCERTAIN = (
 )
 BORE_COMPLIANCE = Uncertain("bore_compliance", "fluid.air_fraction", 0.3)
 """Replaces ``air_fraction`` when the rig file overrides ``C_b``."""
-RIG_VALUES = ("valve_resistance", "air_fraction", "hose_stiffness")
-"""Multipliers of rig values (the rest multiply ModelParameters fields)."""
+PROPAGATED: tuple[Uncertain, ...] = ()
+"""Calibrated too when their tolerance matters to the recording (``HOLD_BELOW``): none. Freed,
+the bore chamber's volume (``bore_volume``), the piston area (``piston_area``), the line
+inertance stood in for the hose's distributed compliance (the bundled hose recording came
+out eccentric_load with the bore volume at 1.75 and the piston area at 1.52) and for the seals'
+stick-slip; their rig values' tolerances are carried into the six multipliers' prior instead
+(the bore length into the hose wall's and the air's, which together set ``C_b``)."""
+RIG_VALUES = ("valve_resistance", "air_fraction", "hose_stiffness", "bore_volume", "piston_area")
+"""Multipliers applied by hand (the rest multiply ModelParameters fields)."""
+MODEL_KEYS = {
+    "caliper_stiffness": "k_c",
+    "valve_resistance": "R_v",
+    "effective_hydraulic_stiffness": "k_eh",
+    "effective_hydraulic_damping": "c_eh",
+    "bore_compliance": "C_b",
+    "block_stiffness": "k_k",
+    "line_inertance": "I_line",
+}
+"""The ``model:`` key that overrides each calibrated quantity outright (docs/interface.md)."""
+HOLD_BELOW = 1.0
+"""A propagated quantity whose one-sigma move changes the data cost by less than this (one
+prior sigma's worth) cannot be told by the recording: it is held at the rig file's value (its
+tolerance stays in the other multipliers' prior)."""
 
 
 def uncertain_values(rig: Rig) -> tuple[Uncertain, ...]:
@@ -68,10 +95,18 @@ def uncertain_values(rig: Rig) -> tuple[Uncertain, ...]:
     (docs/interface.md: tolerance 0 means known exactly): it is left out of the calibration and
     of every candidate's fit.
     """
+    overrides = rig.model_overrides
     values: tuple[Uncertain, ...] = UNCERTAIN
-    if "C_b" in rig.model_overrides:
+    if "C_b" in overrides:
         values = tuple(BORE_COMPLIANCE if u.name == "air_fraction" else u for u in UNCERTAIN)
-    return tuple(u for u in values if rig.tolerance(u.tolerance_key) > 0.0)
+    values = tuple(u for u in values if rig.tolerance(u.tolerance_key) > 0.0)
+    extra = tuple(u for u in PROPAGATED if not (u.name == "bore_volume" and "C_b" in overrides))
+    return values + extra
+
+
+def propagated(name: str) -> bool:
+    """Whether ``name`` is calibrated only where its tolerance matters (``PROPAGATED``)."""
+    return any(u.name == name for u in PROPAGATED)
 
 
 @dataclass(frozen=True)
@@ -83,6 +118,15 @@ class Calibration:
     sigmas: dict[str, float]  # log-sigma of each multiplier (prior)
     uncertainty: dict[str, float]  # posterior log-sigma (from the Jacobian)
     cost: float  # data + prior cost at the optimum
+    correlation: FloatArray | None = None  # prior correlation of the multipliers (None: none)
+    setters: dict[str, tuple[str, ...]] = field(default_factory=dict)  # rig keys setting each
+
+    def whitening(self) -> FloatArray:
+        """``W`` with ``W log_m`` standard normal under the prior (``sigmas``, ``correlation``)."""
+        sigma = np.array(list(self.sigmas.values()))
+        if self.correlation is None or self.correlation.shape != (sigma.size, sigma.size):
+            return np.diag(1.0 / sigma)
+        return whitening(self.correlation * np.outer(sigma, sigma))
 
     def parameters(self, mean_pressure: float) -> ModelParameters:
         """Calibrated LTI coefficients at a mean master-cylinder pressure (Pa)."""
@@ -98,6 +142,8 @@ def apply_multipliers(rig: Rig, mean_pressure: float, m: dict[str, float]) -> Mo
     if "air_fraction" in m:
         fluid = replace(rig.fluid, air_fraction=rig.fluid.air_fraction * m["air_fraction"])
         rig = replace(rig, fluid=fluid)
+    if m.get("piston_area", 1.0) != 1.0:  # the pistons' and the bore's section together
+        m = {**m, "bore_area": m["piston_area"]}
     if "hose_stiffness" in m:
         hose = replace(rig.hose, youngs_modulus=rig.hose.youngs_modulus * m["hose_stiffness"])
         rig = replace(rig, hose=hose)
@@ -105,6 +151,12 @@ def apply_multipliers(rig: Rig, mean_pressure: float, m: dict[str, float]) -> Mo
     changes = {
         name: getattr(nominal, name) * value for name, value in m.items() if name not in RIG_VALUES
     }
+    if "bore_volume" in m:
+        changes["bore_compliance"] = (
+            nominal.bore_compliance * m["bore_volume"] * m.get("bore_compliance", 1.0)
+        )
+    if "piston_area" in m:
+        changes["piston_area"] = nominal.piston_area * m["piston_area"]
     if "valve_resistance" in m:
         valve = rig.model_overrides.get("R_v", rig.needle_valve_resistance)
         changes["line_resistance"] = nominal.line_resistance + valve * (m["valve_resistance"] - 1)
@@ -133,19 +185,43 @@ def simulate_lti(dataset: Dataset, params: ModelParameters) -> dict[str, FloatAr
     return dict(zip(OUTPUT_CHANNELS, outputs))
 
 
+def whitening(covariance: FloatArray) -> FloatArray:
+    """``W`` with ``W^T W`` the inverse of ``covariance`` (Cholesky; jittered if singular)."""
+    scale = np.sqrt(np.diag(covariance))
+    correlation = covariance / np.outer(scale, scale)
+    jitter = 0.0
+    while True:
+        try:
+            lower = np.linalg.cholesky(correlation + jitter * np.eye(len(scale)))
+            break
+        except np.linalg.LinAlgError:
+            jitter = max(2.0 * jitter, 1e-9)
+    return np.linalg.solve(lower, np.eye(len(scale))) / scale
+
+
+def prior(
+    rig: Rig, values: tuple[Uncertain, ...]
+) -> tuple[FloatArray, dict[str, tuple[str, ...]]]:
+    """The multipliers' prior covariance (tolerances propagated) and the keys setting each."""
+    floors = {u.name: max(rig.tolerance(u.tolerance_key), u.minimum_sigma) for u in values}
+    names = [u.name for u in values]
+    own = {
+        u.name: rig.tolerance(u.tolerance_key)
+        for u in values
+        if u.tolerance_key not in KEY_FIELDS or MODEL_KEYS.get(u.name) in rig.model_overrides
+    }
+    covariance, setters = prior_covariance(rig, names, apply_multipliers, floors, own)
+    for u in values:
+        if u.tolerance_key not in setters[u.name]:
+            setters[u.name] = (u.tolerance_key, *setters[u.name])
+    return covariance, setters
+
+
 def calibrate(dataset: Dataset, rig: Rig) -> Calibration:
     """Least-squares calibration of the LTI baseline on the training windows."""
-    sigmas = {
-        u.name: max(rig.tolerance(u.tolerance_key), u.minimum_sigma) for u in uncertain_values(rig)
-    }
-    names = list(sigmas)
-    if not names:  # every uncertain value held fixed (tolerance 0): the nominal model
-        return Calibration(rig=rig, multipliers={}, sigmas={}, uncertainty={}, cost=0.0)
-    sigma = np.array([sigmas[n] for n in names])
     samples = int(dataset.mask(dataset.train).sum()) * len(OUTPUT_CHANNELS)
 
-    def residuals(log_m: FloatArray) -> FloatArray:
-        m = dict(zip(names, np.exp(log_m)))
+    def data_term(m: dict[str, float]) -> FloatArray:
         cache: dict[int, dict[str, FloatArray]] = {}
 
         def predict(window: Window) -> dict[str, FloatArray]:
@@ -155,8 +231,30 @@ def calibrate(dataset: Dataset, rig: Rig) -> Calibration:
                 )
             return cache[window.segment]
 
-        data = window_residuals(dataset, dataset.train, predict)
-        return np.concatenate([data / (MODEL_ERROR * np.sqrt(samples)), log_m / sigma])
+        data: FloatArray = window_residuals(dataset, dataset.train, predict)
+        scaled: FloatArray = data / (MODEL_ERROR * np.sqrt(samples))
+        return scaled
+
+    values = uncertain_values(rig)
+    covariance, setters = prior(rig, values)
+    sigma_all = np.sqrt(np.diag(covariance))
+    nominal = data_term({})
+    kept = tuple(
+        u
+        for u, s in zip(values, sigma_all)
+        if not propagated(u.name)
+        or (s > 0.0 and float(np.sum((data_term({u.name: float(np.exp(s))}) - nominal) ** 2)))
+        >= HOLD_BELOW
+    )
+    if not kept:  # every uncertain value held fixed (tolerance 0): the nominal model
+        return Calibration(rig=rig, multipliers={}, sigmas={}, uncertainty={}, cost=0.0)
+    covariance, setters = prior(rig, kept)
+    names = [u.name for u in kept]
+    sigma = np.sqrt(np.diag(covariance))
+    white = whitening(covariance)
+
+    def residuals(log_m: FloatArray) -> FloatArray:
+        return np.concatenate([data_term(dict(zip(names, np.exp(log_m)))), white @ log_m])
 
     fit = scipy.optimize.least_squares(
         residuals,
@@ -168,14 +266,15 @@ def calibrate(dataset: Dataset, rig: Rig) -> Calibration:
     )
     jacobian = fit.jac
     try:
-        covariance = np.linalg.inv(jacobian.T @ jacobian)
-        posterior = np.sqrt(np.clip(np.diag(covariance), 0.0, None))
+        posterior = np.sqrt(np.clip(np.diag(np.linalg.inv(jacobian.T @ jacobian)), 0.0, None))
     except np.linalg.LinAlgError:
         posterior = sigma
     return Calibration(
         rig=rig,
         multipliers=dict(zip(names, np.exp(fit.x).tolist())),
-        sigmas=sigmas,
+        sigmas=dict(zip(names, sigma.tolist())),
         uncertainty=dict(zip(names, posterior.tolist())),
         cost=float(2.0 * fit.cost),
+        correlation=covariance / np.outer(sigma, sigma),
+        setters=setters,
     )

@@ -39,6 +39,7 @@ from brake_hil.diagnosis.residual_forms import (
     describe_residual,
 )
 from brake_hil.diagnosis.result import Diagnosis, Metrics, explain
+from brake_hil.diagnosis.rig_findings import for_verdict
 from brake_hil.diagnosis.summary import Hypothesis, Summary, plausible, ratio, summarise
 from brake_hil.diagnosis.thresholds import (
     ACCEPT_RATIO,
@@ -183,6 +184,14 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         held_out_metrics(improved_model, improved.theta),
     )
     explanation = explain(summary, verdict, (baseline, chosen, best), evidence, metrics, residual)
+    rig_values, air, words = for_verdict(
+        calibration,
+        improved.parameters(),
+        verdict.effects,
+        float(np.mean([w.mean_pressure for w in dataset.train])),
+    )
+    explanation = f"{words} {explanation}" if words and not verdict.effects else explanation
+    explanation = f"{explanation} {words}" if words and verdict.effects else explanation
     if verdict.effects != ("unexplained",):
         # the description is of the baseline's misfit, which the verdict explains or not
         residual = residual.reworded("the calibrated LTI baseline's misfit")
@@ -205,6 +214,8 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         unfitted=tuple(fits.unfitted),
         checks=checks,
         residual=residual,
+        rig_values=rig_values,
+        air=air,
     )
 
 

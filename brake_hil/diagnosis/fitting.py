@@ -313,7 +313,7 @@ def fit(model: Model, start: FloatArray | None = None, max_iterations: int = 15)
             )
         except (ValueError, np.linalg.LinAlgError) as error:
             raise FitError(f"{name}: the fit failed: {error}") from error
-    return _scored(model, name, result, search.sigma.size)
+    return _scored(model, name, result, search.whiten.shape[0])
 
 
 class _Search:
@@ -327,7 +327,7 @@ class _Search:
         specs = model.parameters()
         self.model = model
         self.own = model.effect_size
-        self.sigma = model.prior_sigmas()
+        self.whiten = model.calibration.whitening()  # the multipliers' correlated prior
         self.lower = np.array([np.log(lo) if log else lo for _, _, lo, _, log in specs])
         self.upper = np.array([np.log(hi) if log else hi for _, _, _, hi, log in specs])
         self.width = self.upper - self.lower
@@ -349,7 +349,7 @@ class _Search:
         thetas = np.array([_from_search(model, r) for r in points])
         data = model.residuals(model.dataset.train, thetas, FIT_SPAN, FIT_DECIMATION)
         data = data / (MODEL_ERROR * np.sqrt(data.shape[1]))
-        return np.hstack([data, points[:, self.own :] / self.sigma])
+        return np.hstack([data, points[:, self.own :] @ self.whiten.T])
 
     def evaluate(self, x: FloatArray) -> FloatArray:
         """:meth:`objective` of :meth:`rows` of ``x``, cached."""

@@ -51,6 +51,8 @@ class Diagnosis:
     checks: dict[str, list[CheckOutcome]] = field(default_factory=dict)  # physics checks run
     residual: ResidualDescription | None = None  # what an unexplained misfit looks like
     confidence_capped: str | None = None  # Verdict.capped: the cap's words, or None
+    rig_values: list[dict[str, object]] = field(default_factory=list)  # rig_findings
+    air: dict[str, object] | None = None  # the air against the rig file's (rig_findings)
 
     def confidence_text(self) -> str:
         """The confidence as printed: ``0.83``, or the cap's words (no number) when capped."""
@@ -85,6 +87,8 @@ class Diagnosis:
                 "explanation": self.explanation,
                 **self._unexplained_form(),
                 **self._doubt(),
+                "rig_values": self.rig_values,
+                **({"air": self.air} if self.air is not None else {}),
             },
             **({"residual": self.residual.as_dict()} if self.residual is not None else {}),
             "mismatch": {

@@ -30,6 +30,7 @@ from brake_hil.diagnosis.diagnose import (
     ratio,
 )
 from brake_hil.diagnosis.fitting import Fit
+from brake_hil.diagnosis.rig_findings import rig_values_text
 from brake_hil.files import output_file
 from brake_hil.physics.calibrated_values import VALUE_LABELS
 from brake_hil.physics.catalogue import CATALOGUE, entry_text
@@ -252,6 +253,12 @@ def _summary(diagnosis: Diagnosis, findings: list[Finding]) -> str:
             f"({worst} NRMSE {_nrmse(before[worst]['nrmse'])}). Something outside the "
             "library: look at the sensors' calibration and the rig's build."
         )
+    elif diagnosis.rig_values:
+        items.append(
+            f"<b>What was wrong:</b> {_text(rig_values_text(diagnosis.rig_values))}; no "
+            "missing physics: the calibrated LTI model explains the recording with it "
+            f"(worst channel {worst}, NRMSE {_nrmse(before[worst]['nrmse'])})."
+        )
     else:
         items.append(
             "<b>What was wrong:</b> nothing the data can show: the calibrated LTI model "
@@ -277,9 +284,18 @@ def _rig_checks(diagnosis: Diagnosis, findings: list[Finding]) -> list[str]:
     """What to check on the rig (HTML items): the effects' rig checks, the doubt, the file."""
     effects = tuple(e for e in diagnosis.effects if e in CATALOGUE)
     doubt = diagnosis.summary.doubt(effects) if effects else None
-    checks = [RIG_CHECKS[e] for e in effects if e in RIG_CHECKS]
+    air = diagnosis.air
+    checks = [
+        f"the air: {air['text']}" if e == "entrained_air" and air is not None else RIG_CHECKS[e]
+        for e in effects
+        if e in RIG_CHECKS
+    ]
+    if air is not None and "entrained_air" not in effects:
+        checks.append(f"the air: {air['text']}")
     checks += [f"what else is there: {doubt}"] if doubt is not None else []
-    checks += [f.words for f in findings]
+    named = {str(v["quantity"]) for v in diagnosis.rig_values}
+    checks += [f"a rig value far outside its tolerance: {v['text']}" for v in diagnosis.rig_values]
+    checks += [f.words for f in findings if f.name not in named]
     return [_text(c) for c in checks]
 
 
@@ -502,7 +518,9 @@ def _html(diagnosis: Diagnosis, out: Path, rig_path: Path | None) -> str:
     when = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
     rig = html.escape(str(rig_path)) if rig_path is not None else "not given"
     named = bool(diagnosis.effects) and diagnosis.effects != ("unexplained",)
-    steps = next_steps(diagnosis.recording, out, rig_path, named, _rig_checks(diagnosis, findings))
+    off = [_text(str(v["text"])) for v in diagnosis.rig_values]
+    checks = _rig_checks(diagnosis, findings)
+    steps = next_steps(diagnosis.recording, out, rig_path, named, checks, off)
     return f"""<!DOCTYPE html>
 <html><head><meta charset="utf-8"><title>brake_hil diagnosis: {html.escape(verdict)}</title>
 <style>body{{font-family:sans-serif;max-width:1200px;margin:auto;line-height:1.4}}

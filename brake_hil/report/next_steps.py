@@ -47,6 +47,7 @@ def next_steps(
     rig_path: Path | None,
     named: bool,
     checks: Sequence[str],
+    off_values: Sequence[str] = (),
 ) -> str:
     """The ``Next steps`` section (HTML).
 
@@ -56,6 +57,7 @@ def next_steps(
         rig_path: the rig file the diagnosis used (``None``: not given).
         named: whether the verdict named physics (else there is no improved model to run).
         checks: what to check on the rig, HTML, one item each.
+        off_values: the rig values far outside their tolerance, in words (HTML), one each.
     """
     model = out / IMPROVED_MODEL
     rig: list[str | Path] = ["--rig", rig_path] if rig_path is not None else []
@@ -67,6 +69,13 @@ def next_steps(
             f"checkout):{_command('bash', 'scripts/run_chain.sh', recording, '--model', model)}"
             "On the rig, give the caliper-model node the same file as its "
             "<code>model_file</code> parameter.</li>"
+        )
+    elif off_values:
+        parts.append(
+            "<li><b>Correct the rig file or the rig</b>: no physics was named, but "
+            f"{'; '.join(off_values)}. Measure the value on the rig and write it into the rig "
+            "file (or fix the part), then re-test; the calibrated LTI model is the one to use "
+            "meanwhile.</li>"
         )
     else:
         parts.append(

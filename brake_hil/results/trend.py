@@ -46,7 +46,7 @@ With 4 % scatter a 12 % fall is found in 88 % of 40-run fleets, 48 % of 20-run o
 from __future__ import annotations
 
 from collections.abc import Iterable, Iterator, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from enum import StrEnum
 import math
 from typing import Final, NamedTuple
@@ -55,6 +55,7 @@ import numpy as np
 from scipy import stats
 
 from brake_hil.diagnosis.physics_checks import IDENTIFIABLE_SHARE
+from brake_hil.diagnosis.rig_findings import AIR_VALUES, air_in_words
 from brake_hil.physics.calibrated_values import VALUE_LABELS
 from brake_hil.physics.catalogue import CATALOGUE, stand_ins
 from brake_hil.results.store import DiagnosisRow
@@ -309,7 +310,19 @@ def rig_trend(rows: Sequence[DiagnosisRow]) -> RigTrend:
     named = {e: sum(e in r.effects for r in kept) for r in kept for e in r.effects}
     series = [_value_series(name, kept, named) for name in values]
     series += [_effect_series(name, kept) for name in effects]
-    return RigTrend(kept[0].rig_name, kept, tuple(series), earlier, notes)
+    return RigTrend(kept[0].rig_name, kept, tuple(_air_said(series, kept)), earlier, notes)
+
+
+def _air_said(series: list[Series], rows: Sequence[DiagnosisRow]) -> list[Series]:
+    """An air finding says which air it is (the rig file's own or more), as last said."""
+    said = next(filter(None, (air_in_words(r.explanation) for r in reversed(rows))), None)
+    out = []
+    for item in series:
+        cause = _advice(item.name).cause
+        if said and item.name in AIR_VALUES and item.finding and item.finding.endswith(cause):
+            item = replace(item, finding=f"{item.finding[: -len(cause)]}{said}")
+        out.append(item)
+    return out
 
 
 def _times(rows: Sequence[DiagnosisRow], runs: list[int]) -> IntArray:

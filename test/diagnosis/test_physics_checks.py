@@ -131,24 +131,17 @@ def _hose_prior_check(folder: Path, required: float = 1.5) -> tuple[float, Check
     )
 
 
-def test_a_hose_the_freed_calibration_explains_only_as_a_softer_hose_is_the_hose(
-    family_b_cases: dict[str, Path], monkeypatch: pytest.MonkeyPatch
+def test_a_hose_within_what_the_bore_tolerances_allow_is_not_claimed(
+    family_b_cases: dict[str, Path],
 ) -> None:
-    """Family b's subtle creeping hose (strength 0.16): the hose cuts the calibrated
-    baseline's held-out error 6.5 times; with the priors freed the baseline comes within 1.50
-    times of it, but only with the hose wall 3.9 sigmas softer than the rig file's: the
-    hose's own physics, so at the bar of 2 it is not set aside (without ``own_rig_values`` it
-    would be, as a parameter error)."""
-    from brake_hil.diagnosis.candidates.hose_compliance import HoseCompliance
-
-    gain, outcome = _hose_prior_check(family_b_cases["single"], required=2.0)
-    assert gain > 3.0
-    assert outcome.passed, outcome.finding
-    assert "only by moving hose_stiffness" in outcome.finding
-    assert "the way hose_compliance moves it" in outcome.finding
-    monkeypatch.setattr(HoseCompliance, "own_rig_values", ())
-    _, without = _hose_prior_check(family_b_cases["single"], required=2.0)
-    assert not without.passed and "a parameter error" in without.finding
+    """Family b's subtle creeping hose (strength 0.16): with the hose wall's prior 0.1 alone
+    the hose cut the calibrated baseline's held-out error 6.5 times, the wall 3.9 sigmas soft.
+    The bore's volume (bore length, piston diameter, area ratio, each within its tolerance)
+    sets the same fixed part of ``C_b``, so its tolerances widen the hose wall's prior to about
+    0.46: that much hose is within what the rig file's tolerances allow, and the hose candidate
+    no longer cuts the baseline's error by the bar of 2 (docs/diagnosis.md, calibration)."""
+    gain, _ = _hose_prior_check(family_b_cases["single"], required=2.0)
+    assert gain < 2.0
 
 
 def test_a_value_that_drifts_without_explaining_does_not_pass_the_check(
@@ -161,7 +154,7 @@ def test_a_value_that_drifts_without_explaining_does_not_pass_the_check(
     gain, outcome = _hose_prior_check(family_b_cases["unexplained"])
     assert gain < 1.5
     assert not outcome.passed
-    assert "but held to its tolerance the baseline still comes within" in outcome.finding
+    assert "a parameter error, not this physics" in outcome.finding
 
 
 def test_a_delay_is_the_same_at_every_amplitude() -> None:

@@ -8,7 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from brake_hil.diagnosis.calibration import BORE_COMPLIANCE, UNCERTAIN
+from brake_hil.diagnosis.calibration import BORE_COMPLIANCE, PROPAGATED, UNCERTAIN
+from brake_hil.diagnosis.rig_findings import air_text
 from brake_hil.physics.catalogue import CATALOGUE
 from brake_hil.results.trend import (
     ADVICE,
@@ -223,7 +224,7 @@ def test_trends_are_one_per_rig_sorted_by_name() -> None:
 
 
 def test_every_calibrated_value_and_effect_has_its_advice() -> None:
-    values = {u.name for u in (*UNCERTAIN, BORE_COMPLIANCE)}
+    values = {u.name for u in (*UNCERTAIN, BORE_COMPLIANCE, *PROPAGATED)}
     assert values | set(CATALOGUE) == set(ADVICE)
 
 
@@ -246,3 +247,20 @@ def test_a_constant_series_is_steady() -> None:
     trend = rig_trend([replace(r, effects=()) for r in rows(fleet)])
     assert trend.findings == ()
     assert trend.summary() == ["no value or effect left its band over 12 runs"]
+
+
+def test_an_air_finding_says_which_air_as_the_verdict_said_it() -> None:
+    base = rows(wearing_fleet(_rng(10_007), 40))
+    for state, ratio, ending in (
+        (
+            "more_than_rig_file",
+            2.6,
+            "more air than the rig file says (2.6 times): bleed the brake",
+        ),
+        ("as_rig_file", 1.1, "as the rig file's air would; the improved model carries it"),
+    ):
+        said = f"entrained_air: ... The air: {air_text(state, ratio)}."
+        told = [*base[:-1], replace(base[-1], explanation=said)]
+        air = next(s for s in rig_trend(told).series if s.name == "air_fraction").finding
+        assert air is not None and air.startswith("fluid air fraction rose")
+        assert air.endswith(ending) and "bleed the circuit" not in air

@@ -124,6 +124,10 @@ def diagnose_one(args: argparse.Namespace) -> int:
     print(f"improved model written to {result.improved_model_path} (caliper_model loads it)")
     verdict = ", ".join(diagnosis.effects) or "none (the calibrated LTI model suffices)"
     print(f"verdict: {verdict} (confidence {diagnosis.confidence_text()})")
+    from brake_hil.diagnosis.rig_findings import verdict_notes
+
+    for line in verdict_notes({"rig_values": diagnosis.rig_values, "air": diagnosis.air}):
+        print(line)
     print(diagnosis.explanation)
     print(f"report: {result.report_path}")
     stored = append_diagnosis(args.recording, rig, result.json_path, database)
@@ -138,6 +142,7 @@ def diagnose_many(args: argparse.Namespace) -> int:
     reason on stderr; the others finished and are in the database).
     """
     from brake_hil.app.diagnose_many import run_diagnose_many
+    from brake_hil.diagnosis.rig_findings import verdict_notes
     from brake_hil.diagnosis.verdict import confidence_text
 
     out = args.out if args.out is not None else Path("out")
@@ -155,7 +160,8 @@ def diagnose_many(args: argparse.Namespace) -> int:
                 seconds = f"{done.seconds:.1f} s"
                 cap = done.document["verdict"].get("confidence_cap")
                 sure = confidence_text(done.confidence, cap if isinstance(cap, str) else None)
-                bar.write(f"{done.job.recording}: {verdict} ({sure}, {seconds})")
+                notes = "".join(f"; {n}" for n in verdict_notes(done.document["verdict"]))
+                bar.write(f"{done.job.recording}: {verdict} ({sure}, {seconds}){notes}")
             bar.finished(outcome.ok)
 
         result = run_diagnose_many(

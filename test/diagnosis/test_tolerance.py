@@ -1,0 +1,144 @@
+"""The calibration's prior carries every toleranced rig value; rig values and air in words."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from brake_hil.diagnosis.calibration import (
+    Calibration,
+    prior,
+    uncertain_values,
+)
+from brake_hil.diagnosis.rig_findings import (
+    AIR_MORE_RATIO,
+    AS_RIG_FILE,
+    air_finding,
+    air_in_words,
+    air_text,
+    for_verdict,
+    outside,
+    verdict_notes,
+)
+from brake_hil.physics.rig import Rig, load_rig
+from brake_hil.report.next_steps import next_steps
+from test.conftest import PROJECT
+
+RIG_FILE = PROJECT / "config" / "rig_default.yaml"
+
+
+def _sigmas(rig: Rig) -> tuple[dict[str, float], dict[str, tuple[str, ...]]]:
+    covariance, setters = prior(rig, uncertain_values(rig))
+    names = [u.name for u in uncertain_values(rig)]
+    return dict(zip(names, np.sqrt(np.diag(covariance)).tolist())), setters
+
+
+def test_the_bore_length_is_carried_into_the_bore_compliance_it_sets() -> None:
+    rig = load_rig(RIG_FILE)
+    sigmas, setters = _sigmas(rig)
+    # C_b = V_b (fluid + walls + air / p): the bore's volume scales the hose wall's share and
+    # the air's alike, so its tolerance widens both priors
+    assert "bore.length" in setters["hose_stiffness"]
+    assert sigmas["hose_stiffness"] > 2.0 * rig.tolerance("hose.youngs_modulus")
+    assert sigmas["caliper_stiffness"] == pytest.approx(0.25, rel=1e-3)  # one key sets it
+    assert setters["caliper_stiffness"] == ("caliper.stiffness",)
+
+
+def test_an_exact_value_adds_nothing_and_an_override_keeps_its_own_tolerance() -> None:
+    rig = load_rig(RIG_FILE)
+    geometry = ("bore.length", "bore.area_ratio", "washer_thickness", "pistons.diameter")
+    exact = replace(rig, tolerances={**rig.tolerances, **dict.fromkeys(geometry, 0.0)})
+    assert _sigmas(exact)[0]["hose_stiffness"] < 0.8 * _sigmas(rig)[0]["hose_stiffness"]
+    overridden = replace(rig, model_overrides={**rig.model_overrides, "k_c": 3.0e7})
+    sigmas, setters = _sigmas(overridden)
+    assert sigmas["caliper_stiffness"] == pytest.approx(rig.tolerance("caliper.stiffness"))
+    assert setters["caliper_stiffness"] == ("caliper.stiffness",)
+
+
+@pytest.mark.parametrize(
+    ("multiplier", "sigma", "posterior", "expected"),
+    [
+        (1.10, 0.1, 0.01, False),  # at the tolerance's edge: within
+        (0.90, 0.1, 0.01, False),
+        (0.60, 0.4, 0.01, False),  # the valve at -40 %: within
+        (2.28, 0.538, 0.01, False),  # k_eh as a contract-spanning null fitted it
+        (1.25, 0.1, 0.01, True),  # 2.2 sigmas
+        (0.50, 0.25, 0.01, True),  # k_c at -2 tolerances
+        (0.60, 0.2, 0.01, True),  # a bore-volume-like value at -2 tolerances
+        (1.25, 0.1, 0.2, False),  # not pinned down by the recording
+        (0.05, 1.0, 0.01, True),  # the air at a twentieth: 3 sigmas below
+    ],
+)
+def test_outside_its_tolerance(
+    multiplier: float, sigma: float, posterior: float, expected: bool
+) -> None:
+    assert outside(multiplier, sigma, posterior) is expected
+
+
+def _calibration(rig: Rig, multipliers: dict[str, float]) -> Calibration:
+    names = [u.name for u in uncertain_values(rig)]
+    covariance, setters = prior(rig, uncertain_values(rig))
+    sigma = np.sqrt(np.diag(covariance))
+    return Calibration(
+        rig=rig,
+        multipliers={n: multipliers.get(n, 1.0) for n in names},
+        sigmas=dict(zip(names, sigma.tolist())),
+        uncertainty=dict.fromkeys(names, 0.01),
+        cost=0.0,
+        setters=setters,
+    )
+
+
+def test_a_value_far_outside_is_named_with_its_keys_and_no_effect_needed() -> None:
+    rig = load_rig(RIG_FILE)
+    calibration = _calibration(rig, {"caliper_stiffness": 0.5})
+    parameters = {f"calibration.{k}": v for k, v in calibration.multipliers.items()}
+    values, air, words = for_verdict(calibration, parameters, (), 1.0e6)
+    assert [v["quantity"] for v in values] == ["caliper_stiffness"]
+    assert values[0]["keys"] == ["caliper.stiffness"]
+    assert values[0]["ratio"] == pytest.approx(0.5)
+    assert values[0]["fitted"] == pytest.approx(0.5 * rig.caliper_stiffness)
+    assert values[0]["sigmas"] == pytest.approx(np.log(0.5) / 0.25, abs=0.01)
+    assert "check caliper stiffness" in str(values[0]["text"])
+    assert words.startswith("A rig value far outside its tolerance: caliper stiffness at 0.50")
+    assert air is None
+    assert verdict_notes({"rig_values": values})[0].startswith("rig value: caliper stiffness")
+    within = _calibration(rig, {"caliper_stiffness": 0.8, "hose_stiffness": 1.15})
+    assert for_verdict(within, {}, (), 1.0e6) == ([], None, "")
+
+
+def test_the_air_as_the_rig_file_says_or_more() -> None:
+    rig = load_rig(RIG_FILE)
+    calibration = _calibration(rig, {})
+    same = air_finding(calibration, {"air_fraction": 1.1}, 0.0, 1.0e6)
+    assert same is not None and same["state"] == "as_rig_file" and same["text"] == AS_RIG_FILE
+    assert "bleed" not in str(same["text"])
+    # 2 x the rig file's air: the candidate's share at gauge zero, seen at 1 MPa
+    share = rig.fluid.air_fraction * (1.0e6 + 1.013e5) ** 2 / (1.013e5 * 1.0e6)
+    more = air_finding(calibration, {"air_fraction": 1.0}, share, 1.0e6)
+    assert more is not None and more["ratio"] == pytest.approx(2.0, rel=1e-3)
+    assert more["state"] == "more_than_rig_file"
+    assert more["text"] == "more air than the rig file says (2.0 times): bleed the brake"
+    assert air_finding(calibration, {"air_fraction": 1.2}, None, 1.0e6) is None
+    calibrated = air_finding(calibration, {"air_fraction": 2.5}, None, 1.0e6)  # no candidate
+    assert calibrated is not None and calibrated["state"] == "more_than_rig_file"
+    assert air_finding(calibration, {"air_fraction": 1.7}, None, 1.0e6) is None  # in its band
+    assert air_finding(calibration, {"air_fraction": 0.05}, None, 1.0e6) is None  # less air
+    assert 1.3 < AIR_MORE_RATIO < 2.0
+
+
+def test_the_air_is_said_the_same_way_where_it_is_read_back() -> None:
+    for state, ratio in (("more_than_rig_file", 2.6), ("as_rig_file", 1.1)):
+        text = air_text(state, ratio)
+        assert air_in_words(f"entrained_air: ... The air: {text}.") == text
+    assert air_in_words("seal_stick_slip: nothing about air") is None
+
+
+def test_next_steps_say_to_correct_the_rig_file_when_only_a_value_is_off(tmp_path: Path) -> None:
+    page = next_steps("rec", tmp_path, None, False, ["x"], ["caliper stiffness at 0.50"])
+    assert "Correct the rig file or the rig" in page and "caliper stiffness at 0.50" in page
+    assert "The rig file's model stands" not in page
+    assert "The rig file's model stands" in next_steps("rec", tmp_path, None, False, [])
