@@ -91,7 +91,7 @@ def _planned_case(tmp_path: Path, family: str, seed: int, number: int, *effects:
     ``effects``, checked), made at 5 s per segment and diagnosed."""
     from brake_hil.virtual_rig.cases import make_case, plan_cases
 
-    spec = plan_cases(number + 1, seed, family=family)[number]
+    spec = plan_cases(number + 1, seed, family=family, span="seed")[number]
     assert sorted(e.name for e in spec.effects) == sorted(effects)
     make_case(spec, tmp_path, pulsing_s=5.0)
     folder = tmp_path / spec.case_id

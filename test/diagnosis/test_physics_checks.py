@@ -103,7 +103,7 @@ def family_b_cases(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     from brake_hil.virtual_rig.cases import make_case, plan_cases
 
     root = tmp_path_factory.mktemp("family_b")
-    specs = plan_cases(26, 1601, family="b")
+    specs = plan_cases(26, 1601, family="b", span="seed")
     folders = {}
     for number in (13, 25):
         make_case(specs[number], root, 5.0)
