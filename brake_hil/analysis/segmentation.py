@@ -267,7 +267,9 @@ def _pulsing(
 ) -> Segment:
     """A pulsing segment with its frequency and level."""
     level = _level(time, pressure, start, end)
-    return Segment("pulsing", float(start), float(end), {"frequency_hz": float(hz), **level}, steady)
+    return Segment(
+        "pulsing", float(start), float(end), {"frequency_hz": float(hz), **level}, steady
+    )
 
 
 def _fundamental_share(
@@ -293,7 +295,10 @@ def _same_pulsing(
     segment: Segment, hz: float, start: float, end: float, taken: list[tuple[float, float]]
 ) -> bool:
     """A piece of pulsing at the rig's frequency next to a steady segment: its settling."""
-    if segment.kind != "pulsing" or abs(float(segment.descriptors["frequency_hz"]) / hz - 1) > 0.05:
+    if (
+        segment.kind != "pulsing"
+        or abs(float(segment.descriptors["frequency_hz"]) / hz - 1) > 0.05
+    ):
         return False
     return any(start <= b + 0.5 and end >= a - 1.5 for a, b in taken)
 
@@ -383,8 +388,7 @@ def _runs(labels: np.ndarray, shortest: int) -> list[tuple[int, int, int]]:
     """Runs ``(first, last, label)`` of equal labels, runs shorter than ``shortest`` merged."""
     edges = np.flatnonzero(np.diff(labels)) + 1
     runs = [
-        [int(p[0]), int(p[-1]), int(labels[p[0]])]
-        for p in np.split(np.arange(labels.size), edges)
+        [int(p[0]), int(p[-1]), int(labels[p[0]])] for p in np.split(np.arange(labels.size), edges)
     ]
     merged: list[list[int]] = []
     for run in runs:
@@ -402,7 +406,9 @@ def _sloped(time: FloatArray, pressure: FloatArray, first: int, last: int) -> Se
     start_level, end_level = float(np.median(part[:5])), float(np.median(part[-5:]))
     change = end_level - start_level
     progress = (part - start_level) / change
-    above = lambda share: float(t[min(np.searchsorted(np.maximum.accumulate(progress), share), t.size - 1)])  # noqa: E731
+    above = lambda share: float(
+        t[min(np.searchsorted(np.maximum.accumulate(progress), share), t.size - 1)]
+    )  # noqa: E731
     t10, t90 = above(0.1), above(0.9)
     rising = change > 0
     if t90 - t10 <= STEP_MAX_S:
@@ -415,6 +421,10 @@ def _sloped(time: FloatArray, pressure: FloatArray, first: int, last: int) -> Se
         return Segment("step", above(0.02), above(0.98), d)
     t0, t1 = above(0.02), above(0.98)
     rate = change * 0.8 / (t90 - t10)
-    d = {"direction": "rise" if rising else "fall", "rate_pa_per_s": rate,
-         "from_pa": start_level, "to_pa": end_level}
+    d = {
+        "direction": "rise" if rising else "fall",
+        "rate_pa_per_s": rate,
+        "from_pa": start_level,
+        "to_pa": end_level,
+    }
     return Segment("ramp", t0, t1, d)
