@@ -6,7 +6,12 @@ import argparse
 from pathlib import Path
 import sys
 
+from typing import TYPE_CHECKING
+
 from brake_hil.cli.verb import RECORDING_HELP, Verb, add_database_argument, json_written
+
+if TYPE_CHECKING:
+    from brake_hil.analysis.segment_comparison import RecordingComparison
 
 RIG_HELP = "the rig file (YAML; default: RECORDING.rig.yaml beside the recording)"
 
@@ -28,7 +33,15 @@ def _rig(args: argparse.Namespace) -> Path:
     return rig
 
 
-__all__ = ["CharacterizeVerb", "CompareVerb"]
+__all__ = ["CharacterizeVerb", "CompareVerb", "print_segments"]
+
+
+def print_segments(comparison: RecordingComparison) -> None:
+    """One line per segment (times, kind, what it is), then its metric per channel."""
+    from brake_hil.cli.segment_lines import segment_lines
+
+    for line in segment_lines(comparison):
+        print(line)
 
 
 class CompareVerb(Verb):
@@ -57,24 +70,22 @@ class CompareVerb(Verb):
                 args.recording, rig, args.json, args.plot, lambda: check_database(args.db)
             )
         print(f"recording {args.recording}  rig {rig} ({result.rig.name})")
-        for segment in result.comparison.segments:
-            print(
-                f"segment {segment.t_start:6.2f}-{segment.t_end:6.2f} s, "
-                f"mean p_i {segment.mean_pressure / 1e6:.2f} MPa"
-            )
-        print(f"{'channel':8s}{'ptp ratio %':>13s}{'tau/T %':>10s}{'NRMSE':>9s}{'cycles':>8s}")
-        for channel, m in result.comparison.metrics().items():
+        print_segments(result.comparison)
+        metrics = result.comparison.metrics()
+        print(f"over {result.comparison.basis.replace('_', ' ')}:")
+        counted = "cycles" if result.comparison.pulsing is not None else "samples"
+        print(f"{'channel':8s}{'ptp ratio %':>13s}{'tau/T %':>10s}{'NRMSE':>9s}{counted:>8s}")
+        for channel, m in metrics.items():
             print(
                 f"{channel:8s}{m['ptp_ratio_pct']:13.1f}{m['tau_over_T_pct']:10.2f}"
-                f"{m['nrmse']:9.4f}{int(m['cycles']):8d}"
+                f"{m['nrmse']:9.4f}{int(m[counted]):8d}"
             )
-        if result.plot_path is not None:
-            print(f"plot written to {result.plot_path}")
+        for figure in result.figures:
+            print(f"plot written to {figure}")
         json_written(result.json_path)
         if args.db:
             from brake_hil.app.results_db import append_comparison
 
-            metrics = result.comparison.metrics()
             stored = append_comparison(args.recording, rig, metrics, args.db)
             print(f"results appended to {stored}")
         return 0
