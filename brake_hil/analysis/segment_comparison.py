@@ -50,8 +50,10 @@ class ScoredSegment:
     unscored: str = ""  # why the segment has no metrics ("" when it has)
 
     def as_dict(self) -> dict[str, object]:
-        """JSON: the segment, its metric's name and the metrics (a steady segment keeps
-        today's ``t_start``, ``t_end``, ``mean_pressure``, ``metrics``)."""
+        """JSON: the segment, its metric's name and the metrics.
+
+        A steady segment keeps today's ``t_start``, ``t_end``, ``mean_pressure``, ``metrics``.
+        """
         s = self.segment
         document: dict[str, object] = {
             "t_start": s.t_start,

@@ -406,9 +406,12 @@ def _sloped(time: FloatArray, pressure: FloatArray, first: int, last: int) -> Se
     start_level, end_level = float(np.median(part[:5])), float(np.median(part[-5:]))
     change = end_level - start_level
     progress = (part - start_level) / change
-    above = lambda share: float(
-        t[min(np.searchsorted(np.maximum.accumulate(progress), share), t.size - 1)]
-    )  # noqa: E731
+    reached = np.maximum.accumulate(progress)
+
+    def above(share: float) -> float:
+        """When the transition has first covered ``share`` of its change (s)."""
+        return float(t[min(int(np.searchsorted(reached, share)), t.size - 1)])
+
     t10, t90 = above(0.1), above(0.9)
     rising = change > 0
     if t90 - t10 <= STEP_MAX_S:

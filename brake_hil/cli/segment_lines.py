@@ -16,14 +16,16 @@ def _what(scored: ScoredSegment) -> str:
     d = s.descriptors
     mpa = 1e-6
     if s.kind in ("pulsing", "modulated"):
-        level = f"p_i {float(d['mean_pressure']) * mpa:.2f} +- {float(d['amplitude_pa']) * mpa:.2f} MPa"
+        mean, half = float(d["mean_pressure"]) * mpa, float(d["amplitude_pa"]) * mpa
+        level = f"p_i {mean:.2f} +- {half:.2f} MPa"
         steady = " (steady: Tables 3-5)" if s.steady else ""
-        mean = "mean " if s.kind == "modulated" else ""
-        return f"{mean}{float(d['frequency_hz']):.2f} Hz, {level}{steady}"
+        prefix = "mean " if s.kind == "modulated" else ""
+        return f"{prefix}{float(d['frequency_hz']):.2f} Hz, {level}{steady}"
     if s.kind == "sweep":
         return (
             f"{float(d['f0_hz']):.1f} -> {float(d['f1_hz']):.1f} Hz ({d['law']}), "
-            f"p_i {float(d['mean_pressure']) * mpa:.2f} +- {float(d['amplitude_pa']) * mpa:.2f} MPa"
+            f"p_i {float(d['mean_pressure']) * mpa:.2f} "
+            f"+- {float(d['amplitude_pa']) * mpa:.2f} MPa"
         )
     if s.kind == "ramp":
         return (
@@ -32,7 +34,8 @@ def _what(scored: ScoredSegment) -> str:
         )
     if s.kind == "step":
         return (
-            f"{d['direction']} {float(d['from_pa']) * mpa:.2f} -> {float(d['to_pa']) * mpa:.2f} MPa "
+            f"{d['direction']} {float(d['from_pa']) * mpa:.2f} -> "
+            f"{float(d['to_pa']) * mpa:.2f} MPa "
             f"in {float(d['rise_time_s']) * 1e3:.0f} ms (10-90 %)"
         )
     return f"p_i {float(d['level_pa']) * mpa:.2f} MPa"
@@ -62,8 +65,10 @@ def _metric_line(kind: str, m: dict[str, object]) -> str:
         return line
     if kind == "step":
         return (
-            f"rise {f['rise_time_s_measured'] * 1e3:.0f} ms (model {f['rise_time_ratio_pct']:.0f} %), "
-            f"overshoot {f['overshoot_pct_measured']:.1f} % (model {f['overshoot_error_pct']:+.1f}), "
+            f"rise {f['rise_time_s_measured'] * 1e3:.0f} ms "
+            f"(model {f['rise_time_ratio_pct']:.0f} %), "
+            f"overshoot {f['overshoot_pct_measured']:.1f} % "
+            f"(model {f['overshoot_error_pct']:+.1f}), "
             f"settling {f['settling_s_measured']:.3f} s (model {f['settling_error_s']:+.3f} s)"
         )
     if kind == "hold":

@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 import sys
-
 from typing import TYPE_CHECKING
 
 from brake_hil.cli.verb import RECORDING_HELP, Verb, add_database_argument, json_written
