@@ -40,6 +40,10 @@ STEP_WINDOW_S = 1.0
 """A step is scored from just before it to the end of the segment after it, at most this long."""
 
 
+SPAN_LAG_S = 0.5
+"""The longest lag (s) sought over a span of ramps and holds (nothing repeats there)."""
+
+
 @dataclass(frozen=True)
 class ScoredSegment:
     """One segment and its metrics per channel (``{}`` for idle, or when unscored)."""
@@ -96,19 +100,12 @@ class RecordingComparison:
         parts = [
             signals.segment_slice(self.time, s.segment.t_start, s.segment.t_end) for s in scored
         ]
-        rate = 1.0 / float(np.median(np.diff(self.time)))
         period = 1.0 / self.excitation_hz
         result = {}
         for key in OUTPUT_CHANNELS:
             model = np.concatenate([self.predicted[key][p] for p in parts])
             meas = np.concatenate([self.measured[key][p] for p in parts])
-            lags = [
-                segment_metrics.lag_s(
-                    self.predicted[key][p], self.measured[key][p], rate, 0.5 * period
-                )
-                for p in parts
-            ]
-            tau = float(np.average(lags, weights=[s.segment.duration for s in scored]))
+            tau = self._lag(key, scored, period)
             result[key] = {
                 "ptp_ratio_pct": 100.0 * float(np.ptp(model)) / float(np.ptp(meas)),
                 "tau_over_T_pct": 100.0 * tau / period,
@@ -117,6 +114,31 @@ class RecordingComparison:
                 "samples": float(model.size),
             }
         return result
+
+    def _lag(self, key: str, scored: list[ScoredSegment], period: float) -> float:
+        """Duration-weighted lag (s) of ``key`` over the segments that show one.
+
+        Oscillations and steps; a ramp's lag is its offset (a shifted ramp is the ramp
+        plus a constant), so with none of those the lag is taken over the whole non-idle
+        span at once, where the ramps' corners show it (within ``SPAN_LAG_S``).
+        """
+        showing = [s.segment for s in scored if s.segment.kind not in ("ramp", "hold")]
+        spans = [(s.t_start, s.t_end) for s in showing]
+        most = 0.5 * period  # an oscillation repeats: a lag is known within half a period
+        if not spans:
+            spans = [(scored[0].segment.t_start, scored[-1].segment.t_end)]
+            most = SPAN_LAG_S
+        lags = [
+            segment_metrics.lag_s(
+                self.time,
+                self.predicted[key],
+                self.measured[key],
+                signals.segment_slice(self.time, a, b),
+                most,
+            )
+            for a, b in spans
+        ]
+        return float(np.average(lags, weights=[b - a for a, b in spans]))
 
     def as_dict(self) -> dict[str, object]:
         """The JSON of ``brake-hil compare``: ``metrics``, ``basis``, ``segments``."""

@@ -57,29 +57,35 @@ def _span(values: FloatArray) -> float:
     return max(float(np.ptp(values)), float(np.finfo(float).tiny))
 
 
-def lag_s(predicted: FloatArray, measured: FloatArray, rate: float, most_s: float) -> float:
-    """Delay (s) of the measurement behind the prediction, by cross-correlation.
+def lag_s(
+    time: FloatArray, predicted: FloatArray, measured: FloatArray, part: slice, most_s: float
+) -> float:
+    """Delay (s) of the measurement behind the prediction over the samples ``part``.
 
-    Positive when the prediction comes first (as the paper's ``tau``), within
-    ``+- most_s``, between samples by a parabola through the peak.
+    The prediction (over the whole recording, so that a shift brings in its own samples)
+    is shifted by each whole-sample lag within ``+- most_s`` and fitted to the measurement
+    with a gain and an offset; the lag of least residual is refined between samples by a
+    parabola. Positive when the prediction comes first, as the paper's ``tau``.
     """
-    a = predicted - np.mean(predicted)
-    b = measured - np.mean(measured)
-    most = max(1, min(int(most_s * rate), a.size - 2))
-    lags = np.arange(-most, most + 1)
-    values = np.array(
-        [
-            np.dot(a[max(0, -k) : a.size - max(0, k)], b[max(0, k) : b.size - max(0, -k)])
-            for k in lags
-        ]
-    )
-    k = int(np.argmax(values))
+    step = sample_interval(time)
+    most = max(1, int(most_s / step))
+    t = time[part]
+    target = measured[part] - np.mean(measured[part])
+    residuals = []
+    for k in range(-most, most + 1):
+        shifted = np.interp(t - k * step, time, predicted)
+        shifted = shifted - np.mean(shifted)
+        scale = float(shifted @ shifted)
+        fit = float(target @ shifted) / scale if scale > 0 else 0.0
+        residuals.append(float(np.sum((target - fit * shifted) ** 2)))
+    values = np.asarray(residuals)
+    k = int(np.argmin(values))
     shift = 0.0
     if 0 < k < values.size - 1:
         left, mid, right = values[k - 1], values[k], values[k + 1]
         curve = left - 2.0 * mid + right
-        shift = 0.5 * (left - right) / curve if curve != 0 else 0.0
-    return float((lags[k] + shift) / rate)
+        shift = 0.5 * (left - right) / curve if curve > 0 else 0.0
+    return float((k - most + shift) * step)
 
 
 # --------------------------------------------------------------------------- sweeps
@@ -320,7 +326,6 @@ def score(
     """
     part = signals.segment_slice(time, *window)
     t, p, model, meas = time[part], pressure[part], predicted[part], measured[part]
-    rate = 1.0 / sample_interval(t)
     result: dict[str, object] = {}
     if segment.kind == "pulsing":
         period = 1.0 / float(segment.descriptors["frequency_hz"])
@@ -338,7 +343,8 @@ def score(
     elif segment.kind == "modulated":
         period = 1.0 / float(segment.descriptors["frequency_hz"])
         result["ptp_ratio_pct"] = 100.0 * _span(model) / _span(meas)
-        result["tau_over_T_pct"] = 100.0 * lag_s(model, meas, rate, 0.5 * period) / period
+        lag = lag_s(time, predicted, measured, part, 0.5 * period)
+        result["tau_over_T_pct"] = 100.0 * lag / period
     if segment.kind not in ("pulsing", "hold"):  # a hold's NRMSE is over its noise alone
         result["nrmse"] = signals.nrmse(model, meas) if np.ptp(meas) > 0 else math.inf
     return result
