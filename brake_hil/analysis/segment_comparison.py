@@ -34,7 +34,13 @@ from brake_hil.physics.rig import Rig
 from brake_hil.topics import OUTPUT_CHANNELS
 from brake_hil.types import FloatArray
 
-__all__ = ["RecordingComparison", "ScoredSegment", "compare_segments", "operating_pressure"]
+__all__ = [
+    "RecordingComparison",
+    "ScoredSegment",
+    "compare_segments",
+    "operating_pressure",
+    "score_prediction",
+]
 
 STEP_WINDOW_S = 1.0
 """A step is scored from just before it to the end of the segment after it, at most this long."""
@@ -53,17 +59,22 @@ class ScoredSegment:
     metrics: dict[str, dict[str, object]]  # channel -> metric -> value
     unscored: str = ""  # why the segment has no metrics ("" when it has)
 
-    def as_dict(self) -> dict[str, object]:
+    def as_dict(self, response: bool = True) -> dict[str, object]:
         """JSON: the segment, its metric's name and the metrics.
 
         A steady segment keeps today's ``t_start``, ``t_end``, ``mean_pressure``, ``metrics``.
+        ``response=False`` leaves out a sweep's per-band points (its summary stays).
         """
         s = self.segment
+        metrics = {
+            channel: {key: value for key, value in m.items() if response or key != "response"}
+            for channel, m in self.metrics.items()
+        }
         document: dict[str, object] = {
             "t_start": s.t_start,
             "t_end": s.t_end,
             "mean_pressure": self.mean_pressure,
-            "metrics": self.metrics,
+            "metrics": metrics,
             **s.as_dict(),
             "metric": segment_metrics.METRIC_NAMES.get(s.kind, "none"),
         }
@@ -268,3 +279,42 @@ def compare_segments(recording: Recording, rig: Rig) -> RecordingComparison:
         operating_pressure=operating,
         excitation_hz=rig.excitation_hz,
     )
+
+
+def score_prediction(
+    recording: Recording, predicted: dict[str, FloatArray], excitation_hz: float, operating: float
+) -> RecordingComparison:
+    """Score a given prediction on every segment (``regress``'s replays of any excitation).
+
+    The prediction (``p_b``, ``F_k``, ``x_c``, raw, on the recording's time base) and the
+    recording are 30 Hz low-passed alike.
+
+    Args:
+        recording: the measurement.
+        predicted: what a model predicted from its raw ``p_i``.
+        excitation_hz: the excitation frequency (its steady pulsing is scored per cycle).
+        operating: the model's operating point (Pa), reported.
+
+    Raises:
+        RecordingError: a measured output is missing, or a channel does not vary.
+        SignalError: nothing but idle (from :meth:`RecordingComparison.metrics`).
+    """
+    filtered = conditioned_channels(recording)
+    rate = recording.sample_rate
+    model = {key: signals.lowpass(value, rate) for key, value in predicted.items()}
+    time = recording.time
+    segments = find_segments(time, filtered["p_i"], rate, excitation_hz)
+    scored = [_scored(segments, k, time, filtered, model) for k in range(len(segments))]
+    _with_hysteresis(scored, time, filtered, model)
+    comparison = RecordingComparison(
+        segments=scored,
+        pulsing=None,
+        time=time,
+        predicted=model,
+        measured={key: filtered[key] for key in OUTPUT_CHANNELS},
+        master_cylinder_pressure=filtered["p_i"],
+        operating_pressure=operating,
+        excitation_hz=excitation_hz,
+    )
+    comparison.metrics()  # refuse here what has nothing to score
+    return comparison
