@@ -26,7 +26,7 @@ by more than 5 % per second to be told from pulsing.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Final
 
 import numpy as np
@@ -44,12 +44,18 @@ PROMINENCE_SHARE: Final = 0.04
 """A turning point stands out by this share of the recording's ``p_i`` range."""
 MAX_HALF_PERIOD_S: Final = 1.0
 """Turning points further apart end an oscillation (0.5 Hz)."""
+GAP_JUMP: Final = 3.0
+"""A half period this many times the longest of the four before it ends an oscillation."""
+MODULATED_JITTER: Final = 0.15
+"""Cycle-to-cycle frequency changes of this median share make the run one modulated train."""
 MIN_CYCLES: Final = 3
 """An oscillation holds at least this many cycles."""
 STEADY_TREND_PER_S: Final = 0.05
 """A cycle's frequency changing by less than this share per second is steady."""
 SWEEP_FIT_R2: Final = 0.9
 """A sweep's frequency follows its law (linear or log in time) at least this well."""
+SWEEP_MIN_RATIO: Final = 1.3
+"""A sweep ends at least this many times higher (or lower) than it starts."""
 FUNDAMENTAL_SHARE: Final = 0.6
 """Steady pulsing carries at least this share of its variance at its fundamental."""
 FLAT_SHARE_PER_S: Final = 0.02
@@ -58,6 +64,9 @@ STEP_MAX_S: Final = 0.15
 """A rise or fall within this time (10-90 %) is a step, slower is a ramp."""
 IDLE_SHARE: Final = 0.05
 """A flat level within this share of the range above the lowest is idle."""
+MIN_RANGE_PA: Final = 2.0e4
+"""A recording whose ``p_i`` moves less than this (Pa, 0.02 MPa; the sensor's noise is about
+1.5 kPa) is idle throughout."""
 LEFTOVER_S: Final = 0.3
 """A gap this short beside an oscillation is its unfinished cycle, not a segment of its own."""
 MIN_CHANGE_SHARE: Final = 0.05
@@ -109,7 +118,7 @@ def find_segments(
     low, high = np.percentile(pressure, [0.5, 99.5])
     scale = float(high - low)
     found = [_pulsing(time, pressure, a, b, excitation_hz, True) for a, b in windows]
-    if not scale > 0.0:
+    if not scale > MIN_RANGE_PA:
         return [Segment("idle", float(time[0]), float(time[-1]), {"level_pa": float(low)})]
     taken = [(s.t_start, s.t_end) for s in found]
     settling = []  # pulsing at the rig's frequency beside a steady segment: left out, as there
@@ -127,7 +136,9 @@ def find_segments(
         part = signals.segment_slice(time, start, end + 0.5 / sample_rate)
         beside = any(abs(start - b) < 1e-6 or abs(end - a) < 1e-6 for a, b in oscillating)
         if part.stop - part.start >= 3 and not (beside and end - start < LEFTOVER_S):
-            found.extend(_slow_segments(time[part], pressure[part], sample_rate, scale, low))
+            for slow in _slow_segments(time[part], pressure[part], sample_rate, scale, low):
+                inside = (max(slow.t_start, start), min(slow.t_end, end))
+                found.append(replace(slow, t_start=inside[0], t_end=inside[1]))
     return sorted(found, key=lambda s: s.t_start)
 
 
@@ -138,7 +149,7 @@ def _turning_points(pressure: FloatArray, scale: float) -> tuple[np.ndarray, np.
     """Indices of alternating peaks (+1) and troughs (-1), the more extreme of repeats kept."""
     from scipy.signal import find_peaks  # type: ignore[import-untyped]
 
-    prominence = PROMINENCE_SHARE * scale
+    prominence = max(PROMINENCE_SHARE * scale, 0.5 * MIN_RANGE_PA)
     peaks, _ = find_peaks(pressure, prominence=prominence)
     troughs, _ = find_peaks(-pressure, prominence=prominence)
     index = np.concatenate([peaks, troughs])
@@ -162,11 +173,22 @@ def _oscillations(time: FloatArray, pressure: FloatArray, scale: float) -> list[
     if index.size < 2 * MIN_CYCLES + 1:
         return []
     times = time[index]
-    breaks = np.flatnonzero(np.diff(times) > MAX_HALF_PERIOD_S)
+    gaps = np.diff(times)
+    recent = np.array([np.max(gaps[max(k - 4, 0) : k]) if k else np.inf for k in range(gaps.size)])
+    breaks = np.flatnonzero((gaps > MAX_HALF_PERIOD_S) | (gaps > GAP_JUMP * recent))
     found: list[Segment] = []
     for run in np.split(np.arange(index.size), breaks + 1):
-        if run.size >= 2 * MIN_CYCLES + 1:
-            found.extend(_split_run(time, pressure, times[run]))
+        if run.size < 2 * MIN_CYCLES + 1:
+            continue
+        turns = times[run]
+        centres, frequencies = _cycle_frequencies(turns)
+        jitter = float(np.median(np.abs(frequencies[2:] - frequencies[:-2]) / frequencies[2:]))
+        if jitter > MODULATED_JITTER:  # irregular cycles throughout: one modulated train
+            start = max(float(turns[0]) - 0.25 / frequencies[0], float(time[0]))
+            end = min(float(turns[-1]) + 0.25 / frequencies[-1], float(time[-1]))
+            found.append(_modulated(time, pressure, start, end, frequencies))
+        else:
+            found.extend(_split_run(time, pressure, turns))
     return found
 
 
@@ -208,7 +230,8 @@ def _split_run(time: FloatArray, pressure: FloatArray, turns: FloatArray) -> lis
         start = float(turns[piece[0]]) - (0.25 / frequencies[0] if k == 0 else 0.0)
         end = float(turns[min(piece[-1] + 2, turns.size - 1)])
         end += 0.25 / frequencies[-1] if k == len(merged) - 1 else 0.0
-        start, end = max(start, float(time[0])), min(end, float(time[-1]))
+        start, end = max(float(start), float(time[0])), min(float(end), float(time[-1]))
+        start = max(start, found[-1].t_end) if found else start
         segment = _classify(time, pressure, start, end, centres[piece], frequencies[piece])
         if found and found[-1].kind == segment.kind == "modulated":
             segment = _modulated(time, pressure, found.pop().t_start, end, frequencies)
@@ -221,7 +244,8 @@ def _modulated(
 ) -> Segment:
     """A modulated train with its mean cycle frequency and level."""
     level = _level(time, pressure, start, end)
-    return Segment("modulated", start, end, {"frequency_hz": float(np.mean(frequencies)), **level})
+    mean = 1.0 / float(np.mean(1.0 / frequencies))
+    return Segment("modulated", start, end, {"frequency_hz": mean, **level})
 
 
 def _classify(
@@ -235,7 +259,7 @@ def _classify(
     """A run of cycles as pulsing, a sweep (linear or log) or a modulated train."""
     trend = np.polyfit(centres, np.log(frequencies), 1)[0] if centres.size > 1 else 0.0
     if abs(trend) < STEADY_TREND_PER_S and np.std(frequencies) < 0.1 * np.mean(frequencies):
-        frequency = float(np.median(frequencies))
+        frequency = 1.0 / float(np.mean(1.0 / frequencies))  # whole periods: no rounding
         segment = _pulsing(time, pressure, start, end, frequency, False)
         if _fundamental_share(time, pressure, start, end, frequency) >= FUNDAMENTAL_SHARE:
             return segment
@@ -249,10 +273,11 @@ def _classify(
     law = max(fits, key=lambda name: fits[name][0])
     r2, coefficients = fits[law]
     level = _level(time, pressure, start, end)
-    if r2 < SWEEP_FIT_R2:
-        return _modulated(time, pressure, start, end, frequencies)
     ends = np.polyval(coefficients, [start, end])
     f0, f1 = (float(v) for v in (np.exp(ends) if law == "log" else ends))
+    moved = max(f0, f1) / max(min(f0, f1), 1e-9)
+    if r2 < SWEEP_FIT_R2 or moved < SWEEP_MIN_RATIO or centres.size < 2 * MIN_CYCLES:
+        return _modulated(time, pressure, start, end, frequencies)
     return Segment("sweep", start, end, {"f0_hz": f0, "f1_hz": f1, "law": law, **level})
 
 
