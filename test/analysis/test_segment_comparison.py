@@ -100,9 +100,10 @@ def test_the_bundled_ramp_and_sweep_are_compared_per_segment(name: str) -> None:
         assert 5.0 < sweep["metrics"]["F_k"]["worst_hz"] < 25.0
     else:  # the seal sticks: the measured loop is wider than the LTI model's
         fall = document["segments"][3]
-        assert fall["metrics"]["F_k"]["loop_width_measured"] > fall["metrics"]["F_k"][
-            "loop_width_model"
-        ]
+        assert (
+            fall["metrics"]["F_k"]["loop_width_measured"]
+            > fall["metrics"]["F_k"]["loop_width_model"]
+        )
 
 
 @pytest.mark.parametrize("name", ["one_washer_open", "one_washer_lti", "effect_sensor_delay"])

@@ -24,11 +24,11 @@ so up to a second late; steps are sharp."""
 
 def _found(segments: list[Segment], kind: str, start: float, end: float) -> Segment:
     """The found segment of ``kind`` overlapping ``[start, end]`` most."""
-    overlaps = [
-        (min(s.t_end, end) - max(s.t_start, start), s) for s in segments if s.kind == kind
-    ]
+    overlaps = [(min(s.t_end, end) - max(s.t_start, start), s) for s in segments if s.kind == kind]
     overlaps = [(o, s) for o, s in overlaps if o > 0]
-    assert overlaps, f"no {kind} found in {start}-{end} s: {[(s.kind, s.t_start) for s in segments]}"
+    assert overlaps, (
+        f"no {kind} found in {start}-{end} s: {[(s.kind, s.t_start) for s in segments]}"
+    )
     return max(overlaps, key=lambda pair: pair[0])[1]
 
 
