@@ -223,7 +223,7 @@ def _moved(values: FloatArray, share: float) -> int:
     """First index where ``values`` has moved ``share`` of its total change from its start."""
     change = values[-1] - values[0]
     progress = (values - values[0]) / change if change != 0 else np.zeros_like(values)
-    return int(min(np.searchsorted(np.maximum.accumulate(progress), share), values.size - 1))
+    return min(int(np.searchsorted(np.maximum.accumulate(progress), share)), values.size - 1)
 
 
 def _ramp_metrics(
@@ -277,10 +277,11 @@ def step_response(
         raise SignalError("a step without a change")
     progress = (values - before) / change
     reached = np.maximum.accumulate(progress)
-    t10 = float(time[min(np.searchsorted(reached, 0.1), time.size - 1)])
-    t90 = float(time[min(np.searchsorted(reached, 0.9), time.size - 1)])
+    last = time.size - 1
+    t10 = float(time[min(int(np.searchsorted(reached, 0.1)), last)])
+    t90 = float(time[min(int(np.searchsorted(reached, 0.9)), last)])
     outside = np.flatnonzero(np.abs(progress - 1.0) > SETTLING_BAND)
-    settled = float(time[min(outside[-1] + 1, time.size - 1)]) if outside.size else float(time[0])
+    settled = float(time[min(int(outside[-1]) + 1, last)]) if outside.size else float(time[0])
     return {
         "rise_time_s": t90 - t10,
         "overshoot_pct": 100.0 * max(float(np.max(progress)) - 1.0, 0.0),
