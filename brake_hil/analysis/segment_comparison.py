@@ -192,7 +192,10 @@ def _scored(
     """Segment ``k`` scored on every channel, or unscored with the reason."""
     s = segments[k]
     part = signals.segment_slice(time, s.t_start, s.t_end)
-    mean = float(np.mean(filtered["p_i"][part])) if part.stop > part.start else math.nan
+    if part.stop - part.start < 3:
+        edge = min(part.start, time.size - 1)
+        return ScoredSegment(s, float(filtered["p_i"][edge]), {}, "too short to score")
+    mean = float(np.mean(filtered["p_i"][part]))
     if s.kind == "idle":
         return ScoredSegment(s, mean, {}, "idle: nothing to score")
     window = _window(segments, k, float(time[-1]))
@@ -205,7 +208,19 @@ def _scored(
             )
     except SignalError as err:
         return ScoredSegment(s, mean, {}, str(err))
+    undefined = _not_finite(metrics)
+    if undefined:
+        return ScoredSegment(s, mean, {}, f"{undefined} is undefined over this segment")
     return ScoredSegment(s, mean, metrics)
+
+
+def _not_finite(metrics: dict[str, dict[str, object]]) -> str:
+    """``channel metric`` of the first value that is not a finite number, else ``""``."""
+    for channel, values in metrics.items():
+        for key, value in values.items():
+            if isinstance(value, float) and not math.isfinite(value):
+                return f"{channel} {key}"
+    return ""
 
 
 def _with_hysteresis(
