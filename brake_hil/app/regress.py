@@ -49,6 +49,7 @@ import numpy as np
 
 from brake_hil.analysis import signals
 from brake_hil.analysis.recording import Recording
+from brake_hil.analysis.segment_comparison import score_prediction
 from brake_hil.analysis.stamp_scoring import (
     DEFAULT_TOLERANCES,
     METRIC_KEYS,
@@ -90,6 +91,8 @@ class ReplayResult:
     replay_s: float  # wall time of the replay (s)
     segments: list[tuple[float, float]]  # steady segments scored (s)
     metrics: dict[str, dict[str, float]]  # channel -> metric -> value
+    basis: str = "steady_cycles"  # or non_idle_segments: a recording without steady pulsing
+    scored_segments: list[dict[str, Any]] = field(default_factory=list)  # every segment's
 
     @property
     def replay_factor(self) -> float:
@@ -106,6 +109,8 @@ class ReplayResult:
             "duration_s": self.duration_s,
             "segments": [list(s) for s in self.segments],
             "metrics": {channel: dict(values) for channel, values in self.metrics.items()},
+            "basis": self.basis,
+            **({"segment_metrics": self.scored_segments} if self.scored_segments else {}),
         }
 
 
@@ -118,14 +123,16 @@ def replay_recording(
     """Replay a recording through a model file's live stepper and score it.
 
     The model steps over the recording's raw ``p_i`` sample by sample (the live node's
-    stepper) and is scored over the steady segments of the filtered ``p_i``.
+    stepper) and is scored over the steady segments of the filtered ``p_i``; a recording
+    without steady pulsing (a ramp, a sweep, a procedure) is scored per segment, its
+    metrics over its non-idle segments (:func:`replay_any`).
 
     ``mean_pressure`` (Pa) defaults to the recording's mean ``p_i``, as the chain passes it
     to the live node.
 
     Raises:
         RecordingError: the recording lacks a measured channel.
-        SignalError: it holds no steady pulsing (the message names the file).
+        NoSteadyPulsingError: nothing but idle (the message names the file).
     """
     measured = recording.measured()
     missing = [key for key, value in measured.items() if value is None]
@@ -146,11 +153,13 @@ def replay_recording(
     replay_s = time.perf_counter() - started
     time_s = recording.time
     rate = recording.sample_rate
+    predicted = dict(zip(OUTPUT_CHANNELS, outputs))
     try:
         segments = signals.steady_segments(time_s, signals.lowpass(pressure, rate), rate, period_s)
+    except NoSteadyPulsingError:
+        return replay_any(recording, str(model_file), mean, predicted, replay_s, period_s)
     except SignalError as err:
         raise type(err)(f"{recording.path}: {err}") from err
-    predicted = dict(zip(OUTPUT_CHANNELS, outputs))
     observed = {key: value for key, value in measured.items() if value is not None}
     return ReplayResult(
         recording=str(recording.path),
@@ -161,6 +170,37 @@ def replay_recording(
         replay_s=replay_s,
         segments=[(float(a), float(b)) for a, b in segments],
         metrics=score_segments(time_s, predicted, observed, segments, period_s),
+    )
+
+
+def replay_any(
+    recording: Recording,
+    model_file: str,
+    mean: float,
+    predicted: dict[str, np.ndarray],
+    replay_s: float,
+    period_s: float,
+) -> ReplayResult:
+    """A replay without steady pulsing scored on every segment, as ``compare`` scores it.
+
+    Raises:
+        NoSteadyPulsingError: nothing but idle to score (the message names the file).
+    """
+    try:
+        scored = score_prediction(recording, predicted, 1.0 / period_s, mean)
+    except SignalError as err:
+        raise NoSteadyPulsingError(f"{recording.path}: nothing to score: {err}") from err
+    return ReplayResult(
+        recording=str(recording.path),
+        model_file=model_file,
+        mean_pressure=mean,
+        samples=int(recording.time.size),
+        duration_s=float(recording.time[-1] - recording.time[0]),
+        replay_s=replay_s,
+        segments=[],
+        metrics=scored.metrics(),
+        basis=scored.basis,
+        scored_segments=[s.as_dict(response=False) for s in scored.segments],
     )
 
 
@@ -394,7 +434,7 @@ class Regression:
     baseline_path: Path
     model_file: Path | None  # the one model file of every bag (--model or the baseline's)
     results: dict[str, ReplayResult]  # bag key (see :func:`bag_key`) -> replay
-    skipped: dict[str, str]  # bag key -> why: recordings without steady pulsing, not scored
+    skipped: dict[str, str]  # bag key -> why: recordings with nothing to score
     lost: tuple[str, ...]  # skipped bags the baseline holds: they no longer score (moved)
     checks: tuple[MetricCheck, ...]  # every metric of every bag against the baseline
     wall_s: float  # wall time of all replays (s)
@@ -449,7 +489,7 @@ def _write_baseline(
 def _scored(
     keys: Sequence[str], outcomes: Sequence[Outcome[ReplayResult]]
 ) -> tuple[dict[str, ReplayResult], dict[str, str]]:
-    """The replays by bag key, and the bags skipped for want of steady pulsing (why).
+    """The replays by bag key, and the bags skipped for want of anything to score (why).
 
     Raises:
         BrakeHilError: the first bag (in order) that failed otherwise.
@@ -504,9 +544,9 @@ def run_regression(
 
     A path that holds no recording, or a recording without its rig file, is
     :attr:`Regression.refused` (one the baseline holds is lost). A recording without steady
-    5 Hz pulsing (a ramp, a sweep) has nothing to score: it is skipped
-    (:attr:`Regression.skipped`, with the reason) and never written to the baseline; one
-    the baseline holds is :attr:`Regression.lost`, a failure.
+    pulsing (a ramp, a sweep) is scored per segment (:func:`replay_any`); one with nothing
+    but idle is skipped (:attr:`Regression.skipped`, with the reason) and never written to
+    the baseline; one the baseline holds is :attr:`Regression.lost`, a failure.
 
     Returns:
         The replays, their checks and the far-off baselines (:func:`far_off`: of the

@@ -221,7 +221,9 @@ def test_bad_rig_key_exits_2_naming_the_key(recording: Path, tmp_path: Path) -> 
     assert "bad_rig.yaml" in line and "caliper.mass" in line
 
 
-def test_recording_without_steady_pulsing_exits_2(tmp_path: Path) -> None:
+def test_recording_without_steady_pulsing_is_compared_per_segment(tmp_path: Path) -> None:
+    # Refused (exit 2) before any excitation but steady pulsing was scored; a ramp is a
+    # ramp now, scored on its static map; characterize still needs pulsing or a sweep.
     time = np.arange(0.0, 3.0, 1e-3)
     ramp = 1e6 * time
     bag = write_recording(
@@ -234,8 +236,11 @@ def test_recording_without_steady_pulsing_exits_2(tmp_path: Path) -> None:
             CALIPER_DISPLACEMENT: -ramp * 1e-11,
         },
     )
-    line = _single_error_line(brake_hil("compare", bag, "--rig", RIG))
-    assert "ramp" in line and "5 Hz" in line
+    done = brake_hil("compare", bag, "--rig", RIG)
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "ramp" in done.stdout and "over non idle segments:" in done.stdout
+    line = _single_error_line(brake_hil("characterize", bag, "--rig", RIG))
+    assert "ramp" in line and "5 Hz or a sweep" in line
 
 
 @pytest.mark.parametrize(
@@ -346,6 +351,20 @@ def test_diagnose_and_benchmark_refuse_bad_input_with_one_line(
 BAGS = Path(__file__).resolve().parents[2] / "bags"
 
 
+def _idle(tmp_path: Path) -> Path:
+    """A recording of sensor noise at rest: nothing to compare."""
+    time = np.arange(0.0, 3.0, 1e-3)
+    noise = np.random.default_rng(0).normal(0.0, 1.5e3, time.size)
+    channels = {
+        MASTER_CYLINDER_PRESSURE: 5e3 + noise,
+        BORE_PRESSURE: 5e3 + noise[::-1],
+        BLOCK_FORCE: 5.0 + noise * 1e-3,
+        CALIPER_DISPLACEMENT: -1e-6 + noise * 1e-12,
+    }
+    shutil.copy(RIG, tmp_path / "idle.rig.yaml")
+    return write_recording(tmp_path / "idle", time, channels)
+
+
 @pytest.mark.parametrize(
     "command",
     [
@@ -354,14 +373,17 @@ BAGS = Path(__file__).resolve().parents[2] / "bags"
         ["compare", "{missing}", "--json", "out/c.json", "--db", "out/r.sqlite"],
         ["characterize", "{missing}", "--json", "out/c.json"],
         ["regress", "{missing}", "--baseline", "out/b.json", "--update", "--db", "out/r.sqlite"],
-        # refused once opened (no steady pulsing): the folders made for it are gone again
-        ["compare", "{ramp}", "--json", "out/x/c.json", "--db", "out/r.sqlite"],
+        # refused once opened (nothing but idle; a ramp to characterise): the folders made
+        # for it are gone again
+        ["compare", "{idle}", "--json", "out/x/c.json", "--db", "out/r.sqlite"],
         ["characterize", "{ramp}", "--json", "out/c.json"],
     ],
 )
 def test_a_refused_command_writes_nothing(command: list[str | Path], tmp_path: Path) -> None:
     missing = tmp_path / "bags" / "hose_compliance"  # a typo of effect_hose_compliance
     paths = {"{missing}": missing, "{ramp}": BAGS / "ramp_one_washer"}
+    if "{idle}" in command:
+        paths["{idle}"] = _idle(tmp_path)
     args = [paths.get(str(arg), arg) for arg in command]
     done = brake_hil(*args, cwd=tmp_path)
     assert done.returncode == 2, done.stdout + done.stderr

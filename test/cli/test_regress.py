@@ -81,24 +81,66 @@ def test_bad_input_exits_2_with_one_line_naming_the_file(tmp_path: Path) -> None
     assert result.returncode == 2 and str(bad_baseline) in result.stderr
 
 
-def test_a_recording_without_steady_pulsing_is_skipped_with_a_note(tmp_path: Path) -> None:
-    ramp = PROJECT / "bags" / "ramp_one_washer"
-    result = regress(ramp, BAG, "--baseline", PROJECT / "bags" / "baseline.json")
+def test_a_ramp_and_a_sweep_are_scored_per_segment_against_the_shipped_baseline() -> None:
+    ramp, sweep = PROJECT / "bags" / "ramp_one_washer", PROJECT / "bags" / "sweep_one_washer"
+    result = regress(ramp, sweep, "--baseline", PROJECT / "bags" / "baseline.json")
     assert result.returncode == 0, result.stdout + result.stderr
-    assert "ramp_one_washer: skipped, no steady 5 Hz pulsing to score" in result.stdout
-    assert not any(line.startswith("ramp_one_washer ") for line in result.stdout.splitlines())
+    assert "ramp_one_washer: 8001 samples" in result.stdout
+    assert "5 segments (idle, ramp, hold), metrics over non-idle" in result.stdout
+    assert "2 segments (ramp, sweep), metrics over non-idle" in result.stdout
+    for name in ("ramp_one_washer", "sweep_one_washer"):
+        rows = [line for line in result.stdout.splitlines() if line.startswith(f"{name} ")]
+        assert len(rows) == 9 and all(row.endswith("ok") for row in rows)
+    stored = json.loads((PROJECT / "bags" / "baseline.json").read_text())["bags"]
+    assert stored["sweep_one_washer"]["basis"] == "non_idle_segments"
+    kinds = [s["kind"] for s in stored["sweep_one_washer"]["segment_metrics"]]
+    assert kinds == ["ramp", "sweep"]
+    assert "worst_hz" in stored["sweep_one_washer"]["segment_metrics"][1]["metrics"]["F_k"]
+
+
+def test_a_recording_of_nothing_but_idle_is_skipped_with_a_note(tmp_path: Path) -> None:
+    idle = _idle_recording(tmp_path / "bags")
+    result = regress(idle, BAG, "--baseline", PROJECT / "bags" / "baseline.json")
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert "idle: skipped, nothing to score" in result.stdout
+    assert not any(line.startswith("idle ") for line in result.stdout.splitlines())
     # A baseline that scored it once: now it does not score, that is a failure.
     baseline = json.loads((PROJECT / "bags" / "baseline.json").read_text())
-    baseline["bags"]["ramp_one_washer"] = baseline["bags"]["one_washer_lti"]
-    baseline["model_file"] = str(CONFIG / "rig_default.yaml")
+    baseline["bags"] = {"idle": baseline["bags"]["one_washer_lti"]}
     copy = tmp_path / "bags" / "baseline.json"
-    copy.parent.mkdir()
     copy.write_text(json.dumps(baseline))
-    shutil.copytree(ramp, tmp_path / "bags" / "ramp_one_washer")
-    lost = regress(tmp_path / "bags" / "ramp_one_washer", "--baseline", copy)
+    lost = regress(idle, "--baseline", copy)
     assert lost.returncode == 1, lost.stdout + lost.stderr
     assert "(in the baseline: FAILED)" in lost.stdout
     assert "every metric within its tolerance" not in lost.stdout
+
+
+def _idle_recording(folder: Path) -> Path:
+    """Sensor noise at rest, with the default rig file beside it."""
+    import numpy as np
+
+    from brake_hil.io.recording_writer import write_recording
+    from brake_hil.topics import (
+        BLOCK_FORCE,
+        BORE_PRESSURE,
+        CALIPER_DISPLACEMENT,
+        MASTER_CYLINDER_PRESSURE,
+    )
+
+    time = np.arange(0.0, 3.0, 1e-3)
+    noise = np.random.default_rng(0).normal(0.0, 1.5e3, time.size)
+    folder.mkdir(parents=True)
+    shutil.copy(CONFIG / "rig_default.yaml", folder / "idle.rig.yaml")
+    return write_recording(
+        folder / "idle",
+        time,
+        {
+            MASTER_CYLINDER_PRESSURE: 5e3 + noise,
+            BORE_PRESSURE: 5e3 + noise[::-1],
+            BLOCK_FORCE: 5.0 + noise * 1e-3,
+            CALIPER_DISPLACEMENT: -1e-6 + noise * 1e-12,
+        },
+    )
 
 
 def test_regress_and_compare_append_to_the_results_database_once_per_recording(
@@ -165,10 +207,11 @@ def test_every_bag_folder_replayed_through_its_own_rig_and_far_off_flagged(
     assert skipped == [
         f"brake-hil regress: {bags / 'truth'}: no recording in this folder: skipped"
     ]
-    assert "ramp_one_washer: skipped, no steady 5 Hz pulsing to score" in created.stdout
-    assert "sweep_one_washer: skipped, no steady 5 Hz pulsing to score" in created.stdout
+    assert "ramp_one_washer: 8001 samples" in created.stdout  # scored per segment
+    assert "sweep_one_washer: 11001 samples" in created.stdout
+    assert "skipped, nothing to score" not in created.stdout
     models = _model_files(baseline)
-    assert len(models) == 10
+    assert len(models) == 12
     for key, model in models.items():
         assert model == f"{key}.rig.yaml"  # each bag's own rig file, beside it
         assert f"replayed through {model} (beside the recording)" in created.stdout

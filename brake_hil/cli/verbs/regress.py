@@ -25,7 +25,7 @@ class RegressVerb(Verb):
     Each recording is replayed through ``--model``, else the baseline's model file when it
     names one, else its own rig file (``RECORDING.rig.yaml`` beside it). A path that holds no
     recording, or a recording with no rig file, is skipped with one line on stderr (exit 2
-    when nothing is left to replay). A bar of recordings replayed (one without steady pulsing
+    when nothing is left to replay). A bar of recordings replayed (one with nothing but idle
     counts as done: it is skipped with a note, not failed), drawn once the inputs are checked.
     A baseline written far off (a ptp ratio more than 25 % from 100 %) is written, flagged
     and exits 1.
@@ -40,8 +40,9 @@ class RegressVerb(Verb):
             "recordings",
             type=Path,
             nargs="+",
-            help="recordings (or folders of them) to replay; a path with no recording, or "
-            "one without steady 5 Hz pulsing, is skipped with a note",
+            help="recordings (or folders of them) to replay; without steady pulsing (a ramp, "
+            "a sweep) each segment is scored; a path with no recording, or one with nothing "
+            "but idle, is skipped with a note",
         )
         parser.add_argument("--baseline", type=Path, required=True, help="baseline JSON")
         parser.add_argument(
@@ -102,10 +103,14 @@ def _print_replays(result: Regression) -> None:
     """Each replay, the totals, each recording skipped, and the checks' table."""
     for key, replay in result.results.items():
         source = result.sources.get(key, "")
+        if replay.scored_segments:  # no steady pulsing: every segment scored
+            kinds = ", ".join(dict.fromkeys(str(s["kind"]) for s in replay.scored_segments))
+            scored = f"{len(replay.scored_segments)} segments ({kinds}), metrics over non-idle"
+        else:
+            scored = f"{len(replay.segments)} steady segments scored"
         print(
             f"{key}: {replay.samples} samples ({replay.duration_s:.1f} s) replayed through "
-            f"{replay.model_file} ({source}) at {replay.replay_factor:.0f}x real time, "
-            f"{len(replay.segments)} steady segments scored"
+            f"{replay.model_file} ({source}) at {replay.replay_factor:.0f}x real time, {scored}"
         )
     print(
         f"{len(result.results)} recordings, {result.data_s:.1f} s of data in "
@@ -113,7 +118,7 @@ def _print_replays(result: Regression) -> None:
     )
     for key, reason in result.skipped.items():
         lost = " (in the baseline: FAILED)" if key in result.lost else ""
-        print(f"{key}: skipped, no steady 5 Hz pulsing to score{lost} -- {reason}")
+        print(f"{key}: skipped, nothing to score{lost} -- {reason}")
     if result.checks:
         for line in format_checks(result.checks):
             print(line)
