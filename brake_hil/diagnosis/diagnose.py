@@ -33,6 +33,7 @@ from brake_hil.diagnosis.candidates import CANDIDATES, candidate
 from brake_hil.diagnosis.dataset import Dataset, prepare
 from brake_hil.diagnosis.evidence import Evidence, collect
 from brake_hil.diagnosis.fitting import Fit, Model, fit
+from brake_hil.diagnosis.groove import groove_asymmetry, symmetric_seals
 from brake_hil.diagnosis.physics_checks import CheckOutcome, check_hypothesis
 from brake_hil.diagnosis.residual_forms import (
     baseline_predictions,
@@ -184,7 +185,10 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         held_out_metrics(baseline_model, baseline.theta),
         held_out_metrics(improved_model, improved.theta),
     )
-    explanation = explain(summary, verdict, (baseline, chosen, best), evidence, metrics, residual)
+    groove = groove_asymmetry(verdict.effects, baseline, fits.singles)
+    explanation = explain(
+        summary, verdict, (baseline, chosen, best), evidence, metrics, residual, groove
+    )
     if verdict.effects != ("unexplained",):
         # the description is of the baseline's misfit, which the verdict explains or not
         residual = residual.reworded("the calibrated LTI baseline's misfit")
@@ -207,6 +211,7 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         unfitted=tuple(fits.unfitted),
         checks=checks,
         residual=residual,
+        groove=groove,
     )
 
 
@@ -279,7 +284,12 @@ def _check_physics(
         key = "+".join(named.effects)
         fits.say(f"checking the physics of {key}")
         checks[key] = check_hypothesis(
-            fits.calibration, fits.dataset, fits.baseline, named, required_ratio(summary)
+            fits.calibration,
+            fits.dataset,
+            fits.baseline,
+            named,
+            required_ratio(summary),
+            symmetric_seals(fits.baseline, fits.singles),
         )
         failed = next((c for c in checks[key] if not c.passed), None)
         if failed is None:

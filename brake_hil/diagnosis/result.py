@@ -14,6 +14,7 @@ from brake_hil.diagnosis.candidates import candidate
 from brake_hil.diagnosis.dataset import Dataset
 from brake_hil.diagnosis.evidence import Evidence
 from brake_hil.diagnosis.fitting import Fit, Model
+from brake_hil.diagnosis.groove import GrooveAsymmetry
 from brake_hil.diagnosis.improved_model import ImprovedModel
 from brake_hil.diagnosis.physics_checks import CheckOutcome, unidentified
 from brake_hil.diagnosis.residual_forms import ResidualDescription
@@ -50,6 +51,7 @@ class Diagnosis:
     checks: dict[str, list[CheckOutcome]] = field(default_factory=dict)  # physics checks run
     residual: ResidualDescription | None = None  # what an unexplained misfit looks like
     confidence_capped: str | None = None  # Verdict.capped: the cap's words, or None
+    groove: GrooveAsymmetry | None = None  # the seal's apply/release asymmetry (stick-slip)
 
     def confidence_text(self) -> str:
         """The confidence as printed: ``0.83``, or the cap's words (no number) when capped."""
@@ -84,6 +86,11 @@ class Diagnosis:
                 "explanation": self.explanation,
                 **self._unexplained_form(),
                 **self._doubt(),
+                **(
+                    {"groove_asymmetry": self.groove.as_dict(self.effects)}
+                    if self.groove is not None
+                    else {}
+                ),
             },
             **({"residual": self.residual.as_dict()} if self.residual is not None else {}),
             "mismatch": {
@@ -172,6 +179,7 @@ def explain(
     evidence: Evidence,
     metrics: tuple[Metrics, Metrics],
     residual: ResidualDescription,
+    groove: GrooveAsymmetry | None = None,
 ) -> str:
     """The verdict in words, with its doubts, set-aside hypotheses and unexplained form.
 
@@ -182,6 +190,7 @@ def explain(
         evidence: where the mismatch was located.
         metrics: the baseline's and the improved model's held-out metrics.
         residual: the description of the baseline's misfit.
+        groove: the seal's apply/release asymmetry, for a seal verdict (:mod:`.groove`).
     """
     baseline, chosen, best = fits
     baseline_metrics, improved_metrics = metrics
@@ -196,6 +205,8 @@ def explain(
                 f"{chosen.held_out_cost / summary.noise_cost:.1f} times it and no other "
                 "candidate cuts the error half as much."
             )
+    if groove is not None and chosen is not None:
+        explanation += f" Seal: {groove.verdict_words(chosen.effects)}"
     if summary.stand_ins:
         first, finding = next(iter(summary.stand_ins.items()))
         others = [e.replace("+", " + ") for e in list(summary.stand_ins)[1:]]
