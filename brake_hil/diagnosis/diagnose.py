@@ -253,7 +253,10 @@ def _decide_with_pairs(
     unnameable, the worst case of each stays charged (the fits only add doubt).
     """
     noise_cost = fits.dataset.noise_cost()
-    ruled_out = unnameable_pairs(fits.baseline, fits.singles)
+    # a pair of a law with its own special case is no hypothesis: neither fitted nor charged
+    ruled_out = frozenset(
+        p for p in unnameable_pairs(fits.baseline, fits.singles) if not _nested(*p)
+    )
     pairs = fits.pairs(ruled_out)
     summary = summarise(
         fits.baseline, fits.singles, pairs, noise_cost, evidence, ruled_out, form_gains
@@ -316,6 +319,11 @@ def _try_fit(
         return []
 
 
+def _nested(first: str, second: str) -> bool:
+    """One of the two holds the other as a special case (``Candidate.contains``)."""
+    return second in candidate(first).contains or first in candidate(second).contains
+
+
 def fit_pairs(
     calibration: Calibration,
     dataset: Dataset,
@@ -341,7 +349,7 @@ def fit_pairs(
     pairs = []
     for other in eligible[1 : PAIR_SHORTLIST + 1]:
         names = (best.effects[0], other.effects[0])
-        if names in ruled_out:
+        if names in ruled_out or _nested(*names):
             continue
         say(f"fitting {' + '.join(names)}")
         other_own = len(other.theta) - len(calibration.sigmas)
