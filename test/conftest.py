@@ -33,6 +33,7 @@ SLOW_PATHS: tuple[str, ...] = (
     "test/diagnosis/test_diagnose_blind.py",  # blind diagnoses of virtual-rig cases
     "test/diagnosis/test_diagnose_recorder_mcap.py",  # a recorder's MCAP through diagnose
     "test/diagnosis/test_slow_physics.py",  # slow seat creep and heating, fitted end to end
+    "test/diagnosis/test_groove_diagnosis.py",  # a groove and stick-slip diagnosed whole
     "test/hostile/test_fuzz.py",  # the hypothesis fuzz of recordings and rig files
     "test/hostile/test_corpus.py",  # the hostile corpus through three commands
     "test/app/test_dask_engine.py",  # Dask clusters started for the test

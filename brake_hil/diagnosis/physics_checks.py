@@ -6,6 +6,9 @@ a label. (One more comparison, against the generic forms of the misfit, needs on
 of the summary and is in the decision itself, for every hypothesis:
 :data:`brake_hil.diagnosis.thresholds.FORM_RATIO`.)
 
+* **Asymmetry** (:func:`asymmetry_check`, a hypothesis with the groove asymmetry only): its
+  fitted apply/release asymmetry is resolved (:mod:`.groove`): a groove whose edges the
+  recording cannot tell apart is stick-slip or the LTI seal, not a groove.
 * **Channels** (:func:`channel_check`): the error it removes is on the channels its physics
   reaches (the catalogue entry's ``channels``), not almost all on others.
 * **Segments** (:func:`segment_check`): fitted on each training segment alone, its own
@@ -39,6 +42,7 @@ of the summary and is in the decision itself, for every hypothesis:
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -47,6 +51,7 @@ from brake_hil.diagnosis.calibration import Calibration
 from brake_hil.diagnosis.candidates import candidate, own_columns
 from brake_hil.diagnosis.dataset import Dataset
 from brake_hil.diagnosis.fitting import Fit, Model, fit
+from brake_hil.diagnosis.groove import seal_asymmetry
 from brake_hil.diagnosis.residual_forms import FORMS, baseline_predictions, describe_residual
 from brake_hil.errors import FitError
 from brake_hil.physics.catalogue import entry
@@ -62,6 +67,7 @@ __all__ = [
     "SEGMENT_TOLERANCE",
     "UNREACHED_SHARE",
     "CheckOutcome",
+    "asymmetry_check",
     "channel_check",
     "check_hypothesis",
     "leftover_check",
@@ -117,9 +123,29 @@ SEGMENT_ITERATIONS = 8
 class CheckOutcome:
     """One check's result: passed, and what it found in words."""
 
-    name: str  # channels, leftover, rivals, segments or wider_priors
+    name: str  # asymmetry, channels, leftover, rivals, segments or wider_priors
     passed: bool
     finding: str
+
+
+def asymmetry_check(hypothesis: Fit, symmetric: Sequence[Fit] = ()) -> CheckOutcome | None:
+    """A groove's fitted apply/release asymmetry is resolved (:mod:`.groove`); None: no groove.
+
+    ``symmetric``: the symmetric seals it is held against (baseline, stick-slip single).
+    """
+    groove = seal_asymmetry(hypothesis, symmetric)
+    if groove is None:
+        return None
+    if groove.asymmetric:
+        return CheckOutcome(
+            "asymmetry", True, f"apply and release edges differ: {groove.in_words()}"
+        )
+    return CheckOutcome(
+        "asymmetry",
+        False,
+        f"its apply/release asymmetry is not resolved ({groove.in_words()}): the recording "
+        "does not tell the groove from a symmetric seal",
+    )
 
 
 def channel_check(baseline: Fit, hypothesis: Fit) -> CheckOutcome:
@@ -385,9 +411,16 @@ def check_hypothesis(
     baseline: Fit,
     hypothesis: Fit,
     required: float,
+    symmetric: Sequence[Fit] = (),
 ) -> list[CheckOutcome]:
-    """The checks of ``hypothesis``, cheapest first, stopping at the first failure."""
-    outcomes = [channel_check(baseline, hypothesis)]
+    """The checks of ``hypothesis``, cheapest first, stopping at the first failure.
+
+    ``symmetric``: the symmetric seals a groove is held against (:func:`asymmetry_check`).
+    """
+    asymmetry = asymmetry_check(hypothesis, symmetric)
+    if asymmetry is not None and not asymmetry.passed:
+        return [asymmetry]
+    outcomes = [*([asymmetry] if asymmetry else []), channel_check(baseline, hypothesis)]
     model = Model(calibration, [candidate(e) for e in hypothesis.effects], dataset)
     if outcomes[-1].passed:
         outcomes.append(leftover_check(model, hypothesis))

@@ -14,6 +14,7 @@ from brake_hil.diagnosis.candidates import candidate
 from brake_hil.diagnosis.dataset import Dataset
 from brake_hil.diagnosis.evidence import Evidence
 from brake_hil.diagnosis.fitting import Fit, Model
+from brake_hil.diagnosis.groove import GrooveAsymmetry
 from brake_hil.diagnosis.improved_model import ImprovedModel
 from brake_hil.diagnosis.physics_checks import CheckOutcome, unidentified
 from brake_hil.diagnosis.posterior import posterior
@@ -53,6 +54,7 @@ class Diagnosis:
     confidence_capped: str | None = None  # Verdict.capped: the cap's words, or None
     rig_values: list[dict[str, object]] = field(default_factory=list)  # rig_findings
     air: dict[str, object] | None = None  # the air against the rig file's (rig_findings)
+    groove: GrooveAsymmetry | None = None  # the seal's apply/release asymmetry (stick-slip)
 
     def confidence_text(self) -> str:
         """The confidence as printed: ``0.83``, or the cap's words (no number) when capped."""
@@ -89,6 +91,11 @@ class Diagnosis:
                 **self._doubt(),
                 "rig_values": self.rig_values,
                 **({"air": self.air} if self.air is not None else {}),
+                **(
+                    {"groove_asymmetry": self.groove.as_dict(self.effects)}
+                    if self.groove is not None
+                    else {}
+                ),
             },
             **({"residual": self.residual.as_dict()} if self.residual is not None else {}),
             "mismatch": {
@@ -177,6 +184,7 @@ def explain(
     evidence: Evidence,
     metrics: tuple[Metrics, Metrics],
     residual: ResidualDescription,
+    groove: GrooveAsymmetry | None = None,
 ) -> str:
     """The verdict in words, with its doubts, set-aside hypotheses and unexplained form.
 
@@ -187,6 +195,7 @@ def explain(
         evidence: where the mismatch was located.
         metrics: the baseline's and the improved model's held-out metrics.
         residual: the description of the baseline's misfit.
+        groove: the seal's apply/release asymmetry, for a seal verdict (:mod:`.groove`).
     """
     baseline, chosen, best = fits
     baseline_metrics, improved_metrics = metrics
@@ -201,6 +210,8 @@ def explain(
                 f"{chosen.held_out_cost / summary.noise_cost:.1f} times it and no other "
                 "candidate cuts the error half as much."
             )
+    if groove is not None and chosen is not None:
+        explanation += f" Seal: {groove.verdict_words(chosen.effects)}"
     if summary.stand_ins:
         first, finding = next(iter(summary.stand_ins.items()))
         others = [e.replace("+", " + ") for e in list(summary.stand_ins)[1:]]

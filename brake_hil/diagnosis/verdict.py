@@ -10,6 +10,7 @@ import dataclasses
 from dataclasses import dataclass
 import math
 
+from brake_hil.diagnosis.candidates import candidate
 from brake_hil.diagnosis.fitting import Fit
 from brake_hil.diagnosis.posterior import posterior
 from brake_hil.diagnosis.summary import Hypothesis, Summary, plausible, ratio
@@ -394,7 +395,11 @@ def _named(summary: Summary, standing: _Standing, chosen: Hypothesis, cap: _Caps
     """The verdict naming ``chosen``, sure by its smallest margin from the rules."""
     log_gains = standing.log_gains
     own = log_gains[chosen.effects]
-    rivals = [g for effects, g in log_gains.items() if not set(effects) & set(chosen.effects)]
+    rivals = [
+        g
+        for effects, g in log_gains.items()
+        if not set(effects) & set(chosen.effects) and not _holds(effects, chosen.effects)
+    ]
     margins = [own - max(rivals, default=0.0), own - math.log(standing.required)]
     if len(chosen.effects) == 1:
         margins += _single_margins(summary, chosen, own, log_gains)
@@ -402,6 +407,15 @@ def _named(summary: Summary, standing: _Standing, chosen: Hypothesis, cap: _Caps
         margins += _pair_margins(chosen, own, log_gains)
     least, capped = cap.apply(margins)
     return Verdict(chosen.effects, _confidence(least), chosen.effects, least, capped)
+
+
+def _holds(effects: tuple[str, ...], chosen: tuple[str, ...]) -> bool:
+    """A single whose law holds the single ``chosen`` as a special case (``contains``).
+
+    It is no rival of ``chosen``: fitting as well, it is ``chosen`` (the groove at ``a = 0``
+    is plain stick-slip; what it resolves of its asymmetry is said apart, ``groove.py``).
+    """
+    return len(effects) == len(chosen) == 1 and chosen[0] in candidate(effects[0]).contains
 
 
 def _single_margins(

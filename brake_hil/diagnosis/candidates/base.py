@@ -140,6 +140,9 @@ class Candidate:
     """Future (s) its output transform reads (an output advanced in time): a fit's run goes
     on this long past its window, so the last samples of the window are simulated, not held at
     the run's final value (``fitting.Model``)."""
+    contains: ClassVar[frozenset[str]] = frozenset()
+    """Candidates this one's law holds as a special case (the groove at ``a = 0`` is plain
+    stick-slip): a pair of it with one of them is no second physics and is not fitted."""
     retired_parameters: ClassVar[tuple[str, ...]] = ()
     """Parameter names of an older law of this physics that no longer means the same: a model
     file that has one is refused (``improved_model``), not run with another meaning."""

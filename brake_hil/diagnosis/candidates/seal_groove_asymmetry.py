@@ -1,4 +1,4 @@
-"""seal_groove_asymmetry: a seal stiffer on release than on apply."""
+"""seal_groove_asymmetry: a seal stiffer on release than on apply, sticking or not."""
 
 from __future__ import annotations
 
@@ -18,6 +18,9 @@ from brake_hil.physics.catalogue import CATALOGUE
 from brake_hil.types import FloatArray, IndexArray
 
 APPLY, RELEASE = 0, 1
+STUCK_APPLY, STUCK_RELEASE, SLIPPING = 0, 1, 2
+FRICTION_START = 0.35
+"""Start of the frictional share: between the LTI seal's groove (0) and stick-slip's 0.7."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -69,20 +72,104 @@ class _Relaxation(Step):
         self.side = np.where(seal >= self.relaxed, APPLY, RELEASE)
 
 
+@dataclass(frozen=True, eq=False)
+class GrooveSlider(Term):
+    """A Jenkins element whose stuck spring is softer on apply edges than on release edges.
+
+    The seed's multivalued seal stiffness (the static stiffness while the seal sticks, none
+    while it slips) with the groove's asymmetry: stuck after slipping back (an apply edge of
+    the loop, or from rest) the spring is ``(1 - a) k_j``; stuck after slipping out (a release
+    edge) it is ``(1 + a) k_j``. It slips at ``F`` either way, so the loop's stick widths
+    are ``2 F / ((1 -+ a) k_j)``: the apply edge longer and flatter than the release edge.
+    """
+
+    spring: FloatArray  # N/m, k_j, the mean of the two edges' stiffness
+    threshold: FloatArray  # N, slip force
+    asymmetry: FloatArray  # -, a
+
+    modes = 3  # STUCK_APPLY, STUCK_RELEASE, SLIPPING
+
+    def couple(self, coupling: Coupling, row: int, entry: Entry) -> None:
+        """The edge's spring acts while the slider sticks."""
+        if entry.mode != SLIPPING:
+            side = -1.0 if entry.mode == STUCK_APPLY else 1.0
+            coupling.extra_stiffness += float(
+                self.spring[row] * (1.0 + side * self.asymmetry[row])
+            )
+
+    def start(self, state: State) -> Step:
+        """Stuck and relaxed, on an apply edge."""
+        return _EdgeSlider(self, len(state.params))
+
+
+class _EdgeSlider(Step):
+    """The slider's state: stuck on an apply or a release edge, or slipping; its offset."""
+
+    def __init__(self, element: GrooveSlider, batch: int) -> None:
+        self.element = element
+        self.state: IndexArray = np.zeros(batch, dtype=np.intp)
+        self.offset = np.zeros(batch)  # x_p - x_c at which the stuck spring is relaxed
+        self.direction = np.zeros(batch)  # +1 slipping while applying, -1 while releasing
+
+    def mode(self) -> IndexArray:
+        """STUCK_APPLY, STUCK_RELEASE or SLIPPING per set."""
+        return self.state
+
+    def _stiffness(self) -> FloatArray:
+        e = self.element
+        side = np.where(self.state == STUCK_RELEASE, 1.0, -1.0)
+        return np.asarray(e.spring * (1.0 + side * e.asymmetry))
+
+    def inputs(self, state: State, explicit: FloatArray) -> None:
+        """The stuck spring's offset force, or the friction force while slipping."""
+        explicit[:, RELATIVE_FORCE] += np.where(
+            self.state == SLIPPING,
+            -self.direction * self.element.threshold,
+            self._stiffness() * self.offset,
+        )
+
+    def update(self, state: State) -> None:
+        """Stick-slip transitions after a step (return mapping)."""
+        threshold = self.element.threshold
+        seal = state.seal()
+        stuck = self.state != SLIPPING
+        trial = self._stiffness() * (seal - self.offset)
+        start_apply = stuck & (trial > threshold)
+        start_release = stuck & (trial < -threshold)
+        stick = ~stuck & (self.direction * state.seal_velocity() <= 0.0)
+        if stick.any():
+            edge = np.where(self.direction > 0, STUCK_RELEASE, STUCK_APPLY)
+            self.state[stick] = edge[stick]
+            spring = self._stiffness()
+            self.offset[stick] = seal[stick] - (
+                self.direction[stick] * threshold[stick] / spring[stick]
+            )
+        for begins, direction in ((start_apply, 1.0), (start_release, -1.0)):
+            if begins.any():
+                self.direction[begins] = direction
+                self.state[begins] = SLIPPING
+
+
 @register_candidate_class
 class SealGrooveAsymmetry(Candidate):
     """Seal groove asymmetry: the seal pushes back harder on release than it yields on apply.
 
     Rectangular-seal grooves are chamfered on the pressure side, so the seal shears easily as
     the piston moves out and rolls it back more stiffly (the seed names the asymmetry and
-    ignores it, section "Characterisation of k_eh"; Anwana, Cai and Chang, SAE 2002-01-0927).
-    Modelled as the seal's equivalent spring with stiffness ``(1 - a) k_eh`` while its
-    deflection from the relaxed position is on the apply side and ``(1 + a) k_eh`` on the
-    release side, switching sharply; the relaxed position creeps toward the deflection with
-    a first-order time constant ``tau_r``. Even harmonics appear in x_c and F_k.
+    ignores it, section "Characterisation of k_eh", and asks for it in a stick-slip seal model,
+    its conclusion; Anwana, Cai and Chang, SAE 2002-01-0927). A share ``phi`` of the seal is
+    the seed's multivalued seal: a Jenkins element (:class:`GrooveSlider`) stuck with stiffness
+    ``(1 - a) k_j`` on the loop's apply edges and ``(1 + a) k_j`` on its release edges,
+    slipping at ``F``. The rest stays the calibrated equivalent spring, with stiffness
+    ``(1 - a) k_eh`` while its deflection from the relaxed position is on the apply side and
+    ``(1 + a) k_eh`` on the release side, switching sharply; the relaxed position creeps
+    toward the deflection with a first-order time constant ``tau_r``. At ``a = 0`` it is
+    plain stick-slip (``phi > 0``) or the LTI seal (``phi = 0``). Even harmonics appear in
+    x_c and F_k.
     """
 
     entry = CATALOGUE["seal_groove_asymmetry"]
+    contains = frozenset({"seal_stick_slip"})
     lead_in = 3.0
     """s of history before the window: the seat creeps over a second or so, so a shorter run
     carries its start into the window and the fit makes the creep faster to forget it; 3 s
@@ -90,11 +177,27 @@ class SealGrooveAsymmetry(Candidate):
     parameters = (
         CandidateParameter("stiffness_asymmetry", "-", -0.9, 0.9, 0.2),
         CandidateParameter("relaxation_time", "s", 0.05, 30.0, 1.0, logarithmic=True),
+        CandidateParameter("friction_share", "-", 0.0, 1.0, FRICTION_START, absent=0.0),
+        CandidateParameter(
+            "seal_spring", "N/m", 2.0e6, 2.0e8, 2.3e7, logarithmic=True, absent=2.3e7
+        ),
+        CandidateParameter("slip_force", "N", 10.0, 3.0e3, 310.0, logarithmic=True, absent=310.0),
     )
 
+    def start(self, context: Context) -> FloatArray:
+        """The seal's spring and slip force from seed eqs. 2-3 for both seals."""
+        values = super().start(context)
+        values[3] = 2.0 * context.seal.static_stiffness
+        values[4] = 2.0 * context.seal.friction_threshold
+        return values
+
     def fill(self, draft: Draft, theta: FloatArray, context: Context) -> None:
-        """A bilinear seal spring about a creeping relaxed position."""
+        """The share phi a groove slider, the rest a bilinear spring about a creeping seat."""
+        share = theta[:, 2]
+        draft.scale("effective_hydraulic_stiffness", 1.0 - share)
+        draft.scale("effective_hydraulic_damping", 1.0 - share)
         draft.add(BilinearSeal(theta[:, 0].copy(), theta[:, 1].copy()))
+        draft.add(GrooveSlider(theta[:, 3] * share, theta[:, 4] * share, theta[:, 0].copy()))
 
     def consistent(self, evidence: dict[str, float]) -> bool:
         """Even harmonics stand out in x_c or F_k."""
