@@ -42,6 +42,9 @@ GROOVE = "seal_groove_asymmetry"
 STICK_SLIP = "seal_stick_slip"
 ASYMMETRY_SIGMAS = 2.0
 """Half-width of the ratio's interval in the fit's sigmas (about 95 % for a Gaussian)."""
+A_LIMIT = 0.999
+"""The largest asymmetry ``|a|`` an interval reaches: at it the recording does not bound the
+ratio (a release/apply stiffness ratio of 1999 or 1/1999), and the words say so."""
 SYMMETRIC_RATIO = 0.1
 """A release/apply stiffness ratio within ``1 +- 0.1`` is a symmetric seal: the smallest
 groove asymmetry the catalogue's range describes (``a`` = 0.05, the virtual rig's lower bound)
@@ -83,9 +86,11 @@ class GrooveAsymmetry:
     def in_words(self) -> str:
         """The ratio and its interval."""
         low, high = self.interval
+        bounded = _ratio(-A_LIMIT) < low and high < _ratio(A_LIMIT)
+        interval = f"interval {low:.2f}-{high:.2f}" if bounded else "interval not bounded"
         return (
             f"release/apply seal stiffness {self.ratio:.2f} "
-            f"(interval {low:.2f}-{high:.2f}, {ASYMMETRY_SIGMAS:g} sigma); the groove "
+            f"({interval}, {ASYMMETRY_SIGMAS:g} sigma); the groove "
             f"leaves {1 / self.cut:.2f} of the best symmetric seal's held-out error"
         )
 
@@ -132,8 +137,8 @@ def seal_asymmetry(fit: Fit, symmetric: Sequence[Fit] = ()) -> GrooveAsymmetry |
     sigma = float("inf") if fit.uncertainty is None else float(fit.uncertainty[index])
     if not sigma == sigma:  # NaN
         sigma = float("inf")
-    low = max(a - ASYMMETRY_SIGMAS * sigma, -0.999)
-    high = min(a + ASYMMETRY_SIGMAS * sigma, 0.999)
+    low = max(a - ASYMMETRY_SIGMAS * sigma, -A_LIMIT)
+    high = min(a + ASYMMETRY_SIGMAS * sigma, A_LIMIT)
     best = min((h.held_out_cost for h in symmetric), default=fit.held_out_cost)
     cut = best / max(fit.held_out_cost, 1e-300)
     return GrooveAsymmetry(a, sigma, _ratio(a), (_ratio(low), _ratio(high)), cut)

@@ -136,3 +136,12 @@ def test_an_asymmetric_groove_slider_has_a_softer_apply_edge(default_rig: Rig, p
     # symmetric: the edges differ only by the line's lag (0.96); a = 0.5: 1.04
     assert slopes[0.5] > slopes[0.0] + 0.04
     assert slopes[-0.5] < slopes[0.0] - 0.04  # stiffer on apply: the other way
+
+
+def test_an_interval_the_recording_does_not_bound_is_said_so() -> None:
+    """A groove fit whose ``a`` is free across its whole range gives no interval in numbers."""
+    loose = seal_asymmetry(_groove(0.3, 5.0), [BASELINE, STICK])
+    assert loose is not None and not loose.resolved
+    assert "interval not bounded" in loose.verdict_words((STICK_SLIP,))
+    bounded = seal_asymmetry(_groove(0.01, 0.4), [BASELINE, STICK])
+    assert bounded is not None and "interval 0." in bounded.verdict_words((STICK_SLIP,))
