@@ -24,10 +24,19 @@ from typing import Any, ClassVar, NamedTuple
 import numpy as np
 
 from brake_hil.errors import EffectError
+from brake_hil.physics import catalogue
 from brake_hil.physics.catalogue import EffectEntry
 from brake_hil.virtual_rig.laws import LtiPlant, Signal, TruthLaw
 
-__all__ = ["STRENGTH", "Effect", "EffectError", "Parameter", "Signal"]
+__all__ = [
+    "STRENGTH",
+    "CatalogueEntryByName",
+    "CatalogueSignatureByName",
+    "Effect",
+    "EffectError",
+    "Parameter",
+    "Signal",
+]
 
 
 class Parameter(NamedTuple):
@@ -136,3 +145,21 @@ class Effect(ABC):
     @abstractmethod
     def law(self, plant: LtiPlant) -> TruthLaw:
         """The truth law at this strength, bound to the truth rig's coefficients."""
+
+
+class CatalogueEntryByName:
+    """The class's catalogue entry, looked up by its ``name`` when read (a descriptor).
+
+    Set on a family's abstract base after its class body, so that :class:`Effect`'s own hook
+    leaves the base alone and every law of the family reads its entry by its name.
+    """
+
+    def __get__(self, instance: object, owner: type[Effect]) -> EffectEntry:
+        return catalogue.entry(owner.name)
+
+
+class CatalogueSignatureByName:
+    """The signature of the class's catalogue entry, looked up when read (a descriptor)."""
+
+    def __get__(self, instance: object, owner: type[Effect]) -> str:
+        return catalogue.entry(owner.name).signature

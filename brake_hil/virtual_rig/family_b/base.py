@@ -21,8 +21,12 @@ from typing import Any, ClassVar, TypeVar
 
 from brake_hil.errors import EffectError
 from brake_hil.physics import catalogue
-from brake_hil.physics.catalogue import EffectEntry, EntryRegistry
-from brake_hil.virtual_rig.effects.base import Effect
+from brake_hil.physics.catalogue import EntryRegistry
+from brake_hil.virtual_rig.effects.base import (
+    CatalogueEntryByName,
+    CatalogueSignatureByName,
+    Effect,
+)
 
 __all__ = [
     "EFFECTS_B",
@@ -34,20 +38,6 @@ __all__ = [
 
 FAMILY_B = "b"
 """The family's name in a case's label."""
-
-
-class _CatalogueEntry:
-    """The class's catalogue entry, looked up by its ``name`` when read (a descriptor)."""
-
-    def __get__(self, instance: object, owner: type[Effect]) -> EffectEntry:
-        return catalogue.entry(owner.name)
-
-
-class _CatalogueSignature:
-    """The signature of the class's catalogue entry, looked up when read (a descriptor)."""
-
-    def __get__(self, instance: object, owner: type[Effect]) -> str:
-        return catalogue.entry(owner.name).signature
 
 
 @dataclass(frozen=True)
@@ -64,8 +54,8 @@ class FamilyBEffect(Effect):
 
 # set after the class body, so that Effect's own hook (which binds an entry found in a class's
 # namespace) leaves the abstract base alone; every family-b class reads them by its name
-FamilyBEffect.entry = _CatalogueEntry()  # type: ignore[assignment]
-FamilyBEffect.signature = _CatalogueSignature()  # type: ignore[assignment]
+FamilyBEffect.entry = CatalogueEntryByName()  # type: ignore[assignment]
+FamilyBEffect.signature = CatalogueSignatureByName()  # type: ignore[assignment]
 
 _Law = TypeVar("_Law", bound=type[FamilyBEffect])
 

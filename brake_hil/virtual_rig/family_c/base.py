@@ -23,8 +23,12 @@ from typing import Any, ClassVar, TypeVar
 
 from brake_hil.errors import EffectError
 from brake_hil.physics import catalogue
-from brake_hil.physics.catalogue import EffectEntry, EntryRegistry
-from brake_hil.virtual_rig.effects.base import Effect
+from brake_hil.physics.catalogue import EntryRegistry
+from brake_hil.virtual_rig.effects.base import (
+    CatalogueEntryByName,
+    CatalogueSignatureByName,
+    Effect,
+)
 
 __all__ = [
     "EFFECTS_C",
@@ -40,20 +44,6 @@ FAMILY_C = "c"
 """The family's name in a case's label."""
 
 
-class _CatalogueEntry:
-    """The class's catalogue entry, looked up by its ``name`` when read (a descriptor)."""
-
-    def __get__(self, instance: object, owner: type[Effect]) -> EffectEntry:
-        return catalogue.entry(owner.name)
-
-
-class _CatalogueSignature:
-    """The signature of the class's catalogue entry, looked up when read (a descriptor)."""
-
-    def __get__(self, instance: object, owner: type[Effect]) -> str:
-        return catalogue.entry(owner.name).signature
-
-
 @dataclass(frozen=True)
 class FamilyCEffect(Effect):
     """Base of the family-c library laws (abstract): ``class X(FamilyCEffect, effect="name")``."""
@@ -67,8 +57,8 @@ class FamilyCEffect(Effect):
 
 
 # set after the class body, so that Effect's own hook leaves the abstract base alone
-FamilyCEffect.entry = _CatalogueEntry()  # type: ignore[assignment]
-FamilyCEffect.signature = _CatalogueSignature()  # type: ignore[assignment]
+FamilyCEffect.entry = CatalogueEntryByName()  # type: ignore[assignment]
+FamilyCEffect.signature = CatalogueSignatureByName()  # type: ignore[assignment]
 
 _Law = TypeVar("_Law", bound=type[FamilyCEffect])
 _Outside = TypeVar("_Outside", bound=type[Effect])
