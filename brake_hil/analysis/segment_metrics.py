@@ -27,6 +27,7 @@ from brake_hil.errors import SignalError
 from brake_hil.types import FloatArray
 
 __all__ = [
+    "HEADLINE_METRICS",
     "METRIC_NAMES",
     "band_windows",
     "hysteresis",
@@ -45,6 +46,16 @@ METRIC_NAMES: Final = {
     "modulated": "peak-to-peak, lag and NRMSE",
 }
 """The metric each scored kind gets, as the output names it (idle is not scored)."""
+HEADLINE_METRICS: Final = {
+    "pulsing": ("ptp_ratio_pct", "tau_over_T_pct", "nrmse"),
+    "sweep": ("mean_gain_ratio_pct", "mean_phase_error_deg", "worst_error_pct", "nrmse"),
+    "ramp": ("map_gain_ratio_pct", "stick_error_pct", "loop_width_error_pct", "nrmse"),
+    "step": ("rise_time_ratio_pct", "overshoot_error_pct", "settling_error_s", "nrmse"),
+    "hold": ("level_error_pct",),
+    "modulated": ("ptp_ratio_pct", "tau_over_T_pct", "nrmse"),
+}
+"""Per scored kind, the metrics that hold model against measurement (a ramp's loop width
+only after a rise): what ``regress`` checks and the live comparator logs."""
 
 SETTLING_BAND: Final = 0.02
 """A step has settled once within this share of its change of its final level."""

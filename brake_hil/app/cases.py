@@ -22,6 +22,7 @@ from brake_hil.virtual_rig.cases import (
     select_cases,
     write_labels,
 )
+from brake_hil.virtual_rig.excitation import EXCITATION_KINDS
 
 __all__ = ["CaseOptions", "CasesResult", "generate_cases", "run_cases"]
 
@@ -38,7 +39,9 @@ class CaseOptions:
             the number kept (empty: every kind).
         family: the family of truth laws (``a``, the registered laws, ``b`` or ``c``; see
             :mod:`brake_hil.virtual_rig.cases`).
-        drive: the pulsing frequency and maximum pressures (default: the paper's).
+        drive: the pulsing frequency, maximum pressures and excitation (default: the
+            paper's pulsing; a ``sweep``, ``ramp`` or ``procedure`` instead, see
+            :func:`~brake_hil.virtual_rig.excitation.named_excitation`).
         span: how the truth rigs differ from their files: ``contract`` (every toleranced
             value uniform within its tolerance, the new kinds mixed in) or ``seed`` (the
             stored sets' draw, to replay them); see :mod:`brake_hil.virtual_rig.draws`.
@@ -174,6 +177,11 @@ def run_cases(
         shown = ",".join(f"{p / 1e6:g}" for p in pressures)
         raise BrakeHilError(
             f"cases: --max-pressures {shown}: give 2-5 increasing pressures of 0.3-10 MPa"
+        )
+    if options.drive.excitation not in EXCITATION_KINDS:
+        raise BrakeHilError(
+            f"cases: --excitation {options.drive.excitation}: choose one of "
+            f"{', '.join(EXCITATION_KINDS)}"
         )
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise BrakeHilError(f"{out}: not empty; choose a new directory for the cases")

@@ -13,7 +13,9 @@ derives the model at each segment's own mean pressure, the live model at one).
 * :func:`replay_recording`: a recording through the live model's per-sample stepper (the
   node's code path, faster than real time), scored over the recording's steady segments.
 * :func:`compare_with_baseline`: metric by metric against a stored baseline, with absolute
-  tolerances; :func:`load_baseline` / :func:`baseline_document` read and write its JSON.
+  tolerances, then segment by segment (:mod:`~brake_hil.app.regress_segments`: every
+  segment a replay holds is scored, pulsing, sweep, ramp, step, hold or modulated);
+  :func:`load_baseline` / :func:`baseline_document` read and write its JSON.
 * :func:`plan_replays` says which recordings the paths name and which model file each is
   replayed through: ``--model`` for all, else the baseline's model file when it names one,
   else each recording's own rig file (``RECORDING.rig.yaml`` beside it, as ``diagnose`` finds
@@ -29,8 +31,10 @@ derives the model at each segment's own mean pressure, the live model at one).
 Baseline JSON: ``{"model_file": path relative to the baseline's folder (only when one model
 file was given for all), "tolerances": {metric: absolute tolerance}, "bags": {name:
 {"model_file": the model file it was replayed through, relative to the baseline's folder,
-"metrics": {channel: {metric: value}}, ...}}}``, a bag named by its path relative to the
-baseline's folder.
+"metrics": {channel: {metric: value}}, "segment_metrics": [{"kind", "t_start", "t_end",
+"metrics": {channel: {metric: value}}, ...}], ...}}}``, a bag named by its path relative to
+the baseline's folder; a bag without ``segment_metrics`` (written before they were kept) is
+checked on its ``metrics`` alone.
 """
 
 from __future__ import annotations
@@ -57,10 +61,10 @@ from brake_hil.analysis.stamp_scoring import (
     score_segments,
 )
 from brake_hil.app.parallel import ONE_PER_CORE, Outcome, Workers, parallel_map, values
-from brake_hil.app.recordings import find_recordings, rig_beside
+from brake_hil.app.regress_plan import Plan, plan_replays
+from brake_hil.app.regress_segments import segment_checks
 from brake_hil.errors import (
     BaselineError,
-    BrakeHilError,
     NoSteadyPulsingError,
     RecordingError,
     SignalError,
@@ -123,9 +127,10 @@ def replay_recording(
     """Replay a recording through a model file's live stepper and score it.
 
     The model steps over the recording's raw ``p_i`` sample by sample (the live node's
-    stepper) and is scored over the steady segments of the filtered ``p_i``; a recording
-    without steady pulsing (a ramp, a sweep, a procedure) is scored per segment, its
-    metrics over its non-idle segments (:func:`replay_any`).
+    stepper) and is scored over the steady segments of the filtered ``p_i``, and every
+    segment it holds on its own (``scored_segments``: a procedure's sweep and ramps too); a
+    recording without steady pulsing (a ramp, a sweep) is scored per segment, its metrics
+    over its non-idle segments (:func:`replay_any`).
 
     ``mean_pressure`` (Pa) defaults to the recording's mean ``p_i``, as the chain passes it
     to the live node.
@@ -161,6 +166,7 @@ def replay_recording(
     except SignalError as err:
         raise type(err)(f"{recording.path}: {err}") from err
     observed = {key: value for key, value in measured.items() if value is not None}
+    every = score_prediction(recording, predicted, 1.0 / period_s, mean).segments
     return ReplayResult(
         recording=str(recording.path),
         model_file=str(model_file),
@@ -170,6 +176,7 @@ def replay_recording(
         replay_s=replay_s,
         segments=[(float(a), float(b)) for a, b in segments],
         metrics=score_segments(time_s, predicted, observed, segments, period_s),
+        scored_segments=[s.as_dict(response=False) for s in every],
     )
 
 
@@ -244,6 +251,8 @@ class MetricCheck(NamedTuple):
     baseline: float | None  # None: no baseline for it
     value: float
     tolerance: float
+    segment: str = ""  # a segment's metric: which (``sweep 11.0-21.0 s``); "": the bag's
+    note: str = ""  # LOST: a segment of the baseline the replay no longer holds
 
     @property
     def delta(self) -> float:
@@ -252,7 +261,9 @@ class MetricCheck(NamedTuple):
 
     @property
     def status(self) -> str:
-        """``ok``, ``MOVED`` (past the tolerance) or ``NEW`` (no baseline)."""
+        """``ok``, ``MOVED`` (past the tolerance), ``NEW`` (no baseline) or ``LOST``."""
+        if self.note:
+            return self.note
         if self.baseline is None:
             return "NEW"
         return "ok" if abs(self.delta) <= self.tolerance else "MOVED"
@@ -300,11 +311,16 @@ def compare_with_baseline(
     results: Mapping[str, ReplayResult],
     baseline: Mapping[str, Any],
 ) -> list[MetricCheck]:
-    """Every metric of every result against ``baseline['bags'][key]['metrics']``."""
+    """Every metric of every result against ``baseline['bags'][key]['metrics']``.
+
+    Then each segment's (:func:`~brake_hil.app.regress_segments.segment_checks`) against
+    the bag's ``segment_metrics``, when the baseline keeps them.
+    """
     tolerances = {**DEFAULT_TOLERANCES, **baseline.get("tolerances", {})}
     checks = []
     for key, result in results.items():
-        stored = baseline.get("bags", {}).get(key, {}).get("metrics", {})
+        entry = baseline.get("bags", {}).get(key, {})
+        stored = entry.get("metrics", {})
         for channel in OUTPUT_CHANNELS:
             for metric in METRIC_KEYS:
                 value = result.metrics[channel][metric]
@@ -319,6 +335,11 @@ def compare_with_baseline(
                         float(tolerances[metric]),
                     )
                 )
+        rows = segment_checks(result.scored_segments, entry.get("segment_metrics"), tolerances)
+        for segment, channel, metric, reference, value, tolerance, note in rows:
+            checks.append(
+                MetricCheck(key, channel, metric, reference, value, tolerance, segment, note)
+            )
     return checks
 
 
@@ -374,57 +395,6 @@ def replay_all(
         replay_file, model_file=model_file, reader=reader, mean_pressure=mean_pressure
     )
     return values(parallel_map(replay, bags, workers, progress))
-
-
-class Plan(NamedTuple):
-    """Which recordings are replayed through which model file, and what was skipped."""
-
-    jobs: list[tuple[Path, Path]]  # (recording, model file)
-    sources: dict[Path, str]  # recording -> where its model file came from
-    refused: dict[str, str]  # path -> why it is not replayed (one line naming it)
-
-
-def _model_for(recording: Path, model_file: Path | None, stored: Path | None) -> tuple[Path, str]:
-    """The model file a recording is replayed through, and where it came from."""
-    if model_file is not None:
-        return model_file, "--model"
-    if stored is not None:
-        return stored, "the baseline's model file"
-    return rig_beside(recording, "--model"), "beside the recording"
-
-
-def plan_replays(
-    paths: Sequence[Path], model_file: Path | None = None, stored: Path | None = None
-) -> Plan:
-    """The recordings ``paths`` name, each with its model file.
-
-    A folder of recordings gives each recording in it. A path that holds no recording (a
-    folder of rig files, a file that is no recording), or a recording without a rig file
-    beside it when neither ``model_file`` nor ``stored`` is given, is refused with its reason.
-
-    Raises:
-        RecordingError: a path that does not exist ("no such recording").
-    """
-    jobs: list[tuple[Path, Path]] = []
-    sources: dict[Path, str] = {}
-    refused: dict[str, str] = {}
-    for path in paths:
-        if not Path(path).exists():
-            raise RecordingError(f"{path}: no such recording")
-        try:
-            found = find_recordings([path])
-        except BrakeHilError as err:
-            refused[str(path)] = str(err)
-            continue
-        for recording in found:
-            try:
-                model, source = _model_for(recording, model_file, stored)
-            except BrakeHilError as err:
-                refused[str(recording)] = str(err)
-                continue
-            jobs.append((recording, model))
-            sources[recording] = source
-    return Plan(jobs, sources, refused)
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,10 @@ from pathlib import Path
 
 import numpy as np
 
+from brake_hil.analysis import signals
 from brake_hil.analysis.comparison import predict
+from brake_hil.analysis.segment_comparison import operating_pressure
+from brake_hil.analysis.segmentation import find_segments
 from brake_hil.errors import BrakeHilError
 from brake_hil.io.recording_writer import write_recording
 from brake_hil.physics.excitation import pulsing_profile
@@ -26,15 +29,10 @@ from brake_hil.topics import (
     CALIPER_DISPLACEMENT,
     MASTER_CYLINDER_PRESSURE,
 )
+from brake_hil.types import FloatArray
 from brake_hil.virtual_rig.bag import write_run
 from brake_hil.virtual_rig.effects import Effect, parse_effect
-from brake_hil.virtual_rig.excitation import (
-    Excitation,
-    frequency_sweep,
-    pressure_ramp,
-    seed_pulsing,
-    solenoid_pulsing,
-)
+from brake_hil.virtual_rig.excitation import Excitation, named_excitation, solenoid_pulsing
 from brake_hil.virtual_rig.simulator import (
     MAX_STEP,
     RELATIVE_TOLERANCE,
@@ -45,6 +43,7 @@ from brake_hil.virtual_rig.simulator import (
 
 __all__ = [
     "EXCITATIONS",
+    "LTI_EXCITATIONS",
     "LtiSimulation",
     "VirtualSimulation",
     "excitation_of",
@@ -52,8 +51,10 @@ __all__ = [
     "run_virtual_simulate",
 ]
 
-EXCITATIONS = ("pulsing", "solenoid", "ramp", "sweep")
+EXCITATIONS = ("pulsing", "solenoid", "ramp", "sweep", "procedure")
 """The virtual rig's excitations (see :func:`excitation_of`)."""
+LTI_EXCITATIONS = ("pulsing", "ramp", "sweep", "procedure")
+"""The LTI model's excitations: those that are a master-cylinder pressure ``p_i``."""
 
 
 @dataclass(frozen=True)
@@ -66,9 +67,14 @@ class LtiSimulation:
 
 
 def run_simulate(
-    rig_path: Path, out: Path, max_pressures: Sequence[float], pulsing_s: float, seed: int
+    rig_path: Path,
+    out: Path,
+    max_pressures: Sequence[float],
+    pulsing_s: float,
+    seed: int,
+    excitation: str = "pulsing",
 ) -> LtiSimulation:
-    """Write the LTI model's recording of the paper's pulsing with the DAQ's noise.
+    """Write the LTI model's recording of an excitation with the DAQ's noise.
 
     Args:
         rig_path: the rig YAML.
@@ -76,21 +82,35 @@ def run_simulate(
         max_pressures: maximum master-cylinder pressures (Pa), one segment each.
         pulsing_s: seconds of 5 Hz pulsing per segment.
         seed: seed of the sensor noise.
+        excitation: one of :data:`LTI_EXCITATIONS` (see :func:`excitation_of`); the model
+            is derived at the mean ``p_i`` after the first second for ``pulsing``, else at
+            the operating point ``compare`` derives it at
+            (:func:`~brake_hil.analysis.segment_comparison.operating_pressure`).
 
     Returns:
         What was written.
 
     Raises:
-        BrakeHilError: a bad rig file, or ``out`` exists.
+        BrakeHilError: a bad rig file or excitation, or ``out`` exists.
     """
+    if excitation not in LTI_EXCITATIONS:
+        raise BrakeHilError(
+            f"--excitation {excitation}: the LTI model takes {', '.join(LTI_EXCITATIONS)} "
+            "(solenoid needs the virtual rig)"
+        )
     rig = load_rig(rig_path)
     if out.exists():
         raise BrakeHilError(f"{out}: already exists; choose a new output directory")
-    time, pressure = pulsing_profile(
-        max_pressures, pulsing_s=pulsing_s, pulsing_hz=rig.excitation_hz
-    )
-    params = derive_parameters(rig, float(np.mean(pressure[time > 1.0])))
-    outputs = predict(pressure, params)
+    if excitation == "pulsing":
+        time, pressure = pulsing_profile(
+            max_pressures, pulsing_s=pulsing_s, pulsing_hz=rig.excitation_hz
+        )
+        operating = float(np.mean(pressure[time > 1.0]))
+    else:
+        drive = excitation_of(excitation, rig, max_pressures, pulsing_s)
+        time, pressure = drive.time, drive.pressure
+        operating = _operating_point(time, pressure, rig.excitation_hz)
+    outputs = predict(pressure, derive_parameters(rig, operating))
     rng = np.random.default_rng(seed)
     channels = {
         MASTER_CYLINDER_PRESSURE: measure(pressure, SENSORS["p_i"], rng),
@@ -102,6 +122,14 @@ def run_simulate(
     return LtiSimulation(out, int(time.size), float(time[-1]))
 
 
+def _operating_point(time: FloatArray, pressure: FloatArray, excitation_hz: float) -> float:
+    """Where ``compare`` derives the model for a recording of ``pressure`` (Pa)."""
+    rate = 1.0 / float(time[1] - time[0])
+    filtered = signals.lowpass(pressure, rate)
+    segments = find_segments(time, filtered, rate, excitation_hz)
+    return operating_pressure(filtered, time, segments)
+
+
 def excitation_of(
     kind: str, rig: Rig, max_pressures: Sequence[float], pulsing_s: float
 ) -> Excitation:
@@ -110,7 +138,9 @@ def excitation_of(
     Args:
         kind: ``pulsing`` (``p_i`` ramp then 5 Hz), ``solenoid`` (air pressure through the
             master cylinder, eqs. 21a-b), ``ramp`` (rise, hold, fall to the highest
-            pressure) or ``sweep`` (5-25 Hz over ``2 * pulsing_s``).
+            pressure), ``sweep`` (5-25 Hz over ``2 * pulsing_s``) or ``procedure`` (all
+            of these chained with an ABS-like pulse train,
+            :func:`~brake_hil.virtual_rig.excitation.procedure`).
         rig: the truth rig (its excitation frequency, its master cylinder).
         max_pressures: maximum master-cylinder pressures (Pa), one segment each.
         pulsing_s: seconds of pulsing per segment.
@@ -121,12 +151,7 @@ def excitation_of(
     pressures = list(max_pressures)
     if kind == "solenoid":
         return solenoid_pulsing(rig, pressures, pulsing_s=pulsing_s, pulsing_hz=rig.excitation_hz)
-    if kind == "ramp":
-        return pressure_ramp(max(pressures))
-    if kind == "sweep":
-        top = max(pressures)
-        return frequency_sweep(0.78 * top, 0.22 * top, sweep_s=2.0 * pulsing_s)
-    return seed_pulsing(pressures, pulsing_s=pulsing_s, pulsing_hz=rig.excitation_hz)
+    return named_excitation(kind, pressures, pulsing_s=pulsing_s, pulsing_hz=rig.excitation_hz)
 
 
 @dataclass(frozen=True)

@@ -15,6 +15,7 @@ from brake_hil.cli.verb import add_database_argument
 from brake_hil.cli.verbs import VERBS
 from brake_hil.cli.verbs.simulate import (
     EXCITATIONS,
+    LTI_EXCITATIONS,
     RELATIVE_TOLERANCE,
     SOLVER_METHOD,
     uses_virtual_rig,
@@ -22,6 +23,7 @@ from brake_hil.cli.verbs.simulate import (
 
 __all__ = [
     "EXCITATIONS",
+    "LTI_EXCITATIONS",
     "RELATIVE_TOLERANCE",
     "SOLVER_METHOD",
     "add_database_argument",

@@ -73,7 +73,13 @@ from brake_hil.virtual_rig.effects import (
     EffectError,
     effect_class,
 )
-from brake_hil.virtual_rig.excitation import Excitation, seed_pulsing, solenoid_pulsing
+from brake_hil.virtual_rig.excitation import (
+    Excitation,
+    air_driven,
+    named_excitation,
+    seed_pulsing,
+    solenoid_pulsing,
+)
 from brake_hil.virtual_rig.family_b import (
     EFFECTS_B,
     FAMILY_B,
@@ -179,6 +185,7 @@ class CaseDrive:
 
     excitation_hz: float | None = None  # Hz, the pulsing (None: the nominal rig's, 5 Hz)
     max_pressures: tuple[float, ...] = SEED_MAX_PRESSURES  # Pa, one steady segment each
+    excitation: str = "pulsing"  # one of EXCITATION_KINDS (pulsing: the seed's)
 
     def nominal(self, rig: Rig) -> Rig:
         """The nominal rig as the case's ``rig.yaml`` describes it: pulsing at this drive's."""
@@ -188,10 +195,13 @@ class CaseDrive:
 
     def as_dict(self, rig_hz: float) -> dict[str, Any]:
         """The drive for ``labels.json`` (``rig_hz``: the nominal rig's pulsing, Hz)."""
-        return {
+        result: dict[str, Any] = {
             "excitation_hz": rig_hz if self.excitation_hz is None else self.excitation_hz,
             "max_pressures_mpa": [round(p / 1e6, 6) for p in self.max_pressures],
         }
+        if self.excitation != "pulsing":  # the seed's pulsing: the labels as they always were
+            result["excitation"] = self.excitation
+        return result
 
 
 SEED_DRIVE = CaseDrive()
@@ -408,11 +418,19 @@ def case_excitation(
     truth: Rig,
     pulsing_s: float,
     max_pressures: Sequence[float] = SEED_MAX_PRESSURES,
+    kind: str = "pulsing",
 ) -> Excitation:
-    """Pulsing at ``truth``'s frequency, solenoid-driven or as ``p_i``.
+    """Pulsing at ``truth``'s frequency, solenoid-driven or as ``p_i``; or another ``kind``.
 
     One segment per maximum pressure (Pa): the seed's 1.38, 2.07, 2.76 MPa by default.
+    Another of :data:`~brake_hil.virtual_rig.excitation.EXCITATION_KINDS` is its ``p_i``,
+    or the air pressure of it (:func:`~brake_hil.virtual_rig.excitation.air_driven`).
     """
+    if kind != "pulsing":
+        drive = named_excitation(
+            kind, max_pressures, pulsing_s=pulsing_s, pulsing_hz=truth.excitation_hz
+        )
+        return air_driven(truth, drive) if spec.air_driven else drive
     if spec.air_driven:
         return solenoid_pulsing(
             truth, max_pressures, pulsing_s=pulsing_s, pulsing_hz=truth.excitation_hz
@@ -485,7 +503,7 @@ def make_case(
     """Simulate and write one case; return its label."""
     nominal = case_nominal(spec, drive)
     truth = truth_rig(nominal, spec.parameter_errors, f"truth of case {spec.case_id}")
-    excitation = case_excitation(spec, truth, pulsing_s, drive.max_pressures)
+    excitation = case_excitation(spec, truth, pulsing_s, drive.max_pressures, drive.excitation)
     effects = (*spec.effects, *measurement_chain(spec))
     run = simulate_rig(truth, effects, excitation, rig_air=spec.rig_air, seed=spec.noise_seed)
     folder = cases_dir / spec.case_id
@@ -493,6 +511,8 @@ def make_case(
     write_run(run, folder / "recording")
     write_rig(nominal, folder / "rig.yaml", "The rig as the test engineer describes it.")
     result = label(spec, truth, excitation)
+    if drive.excitation != "pulsing":
+        result["excitation_kind"] = drive.excitation
     result["simulation_seconds"] = round(run.solver.seconds, 3)
     return result
 

@@ -1,4 +1,7 @@
-"""Inputs of the virtual rig: the seed's ramp-then-pulse, a ramp, a 5-25 Hz sweep, the solenoid.
+"""Inputs of the virtual rig: ramp-then-pulse, ramp, sweep, procedure, ABS train, solenoid.
+
+The seed's ramp-then-pulse, a ramp, a 5-25 Hz sweep, a test procedure chaining them with an
+ABS-like pulse train, the solenoid.
 
 An :class:`Excitation` is a sampled pressure (Pa, gauge) at the 1 kHz stamps, either the
 master-cylinder pressure ``p_i`` (eqs. 21c-f) or the air pressure ``p_a`` behind the master
@@ -22,11 +25,16 @@ from brake_hil.types import FloatArray
 from brake_hil.virtual_rig.effects.base import EffectError
 
 __all__ = [
+    "EXCITATION_KINDS",
     "SAMPLE_RATE_HZ",
     "SEED_MAX_PRESSURES",
     "Excitation",
+    "abs_pulse_train",
+    "air_driven",
     "frequency_sweep",
+    "named_excitation",
     "pressure_ramp",
+    "procedure",
     "seed_pulsing",
     "seed_pulsing_from",
     "solenoid_pulsing",
@@ -239,3 +247,113 @@ def solenoid_pulsing_from(
         f"{schedule.pulsing_s:g} s each"
     )
     return Excitation(time, air, ModelInput.AIR_PRESSURE, label)
+
+
+EXCITATION_KINDS = ("pulsing", "sweep", "ramp", "procedure")
+"""The master-cylinder pressures :func:`named_excitation` makes."""
+ABS_PERIODS_S = (0.14, 0.22, 0.16, 0.28, 0.12, 0.2, 0.25, 0.15, 0.3, 0.18)
+"""The periods (s) an ABS-like train cycles through: 3-8 Hz, never steady."""
+PROCEDURE_HOLD_S = 1.0
+"""The hold between the parts of a procedure (s): where one ends and the next begins."""
+
+
+def _blend(start: float, end: float, duration_s: float) -> FloatArray:
+    """A half-cosine move from ``start`` to ``end`` (Pa) over ``duration_s``, at 1 kHz."""
+    t = np.arange(int(round(duration_s * SAMPLE_RATE_HZ))) / SAMPLE_RATE_HZ
+    return np.asarray(start + (end - start) * (0.5 - 0.5 * np.cos(math.pi * t / duration_s)))
+
+
+def abs_pulse_train(
+    level: float = 2.2e6, depth: float = 0.45, *, pulses: int = 14, rest_s: float = 0.5
+) -> Excitation:
+    """An ABS-like modulated apply: a fast apply, then pressure pulses, then a release.
+
+    The brake is applied to ``level`` (Pa) in 0.1 s and held 0.5 s; each pulse then dumps
+    the pressure by ``depth`` (share of ``level``) within a quarter of its period, holds a
+    tenth, and rebuilds linearly; the periods cycle through :data:`ABS_PERIODS_S`. A 0.1 s
+    release and ``rest_s`` at rest close it.
+    """
+    corners_t, corners_p = [0.0, rest_s, rest_s + 0.1, rest_s + 0.6], [0.0, 0.0, level, level]
+    low = level * (1.0 - depth)
+    for k in range(pulses):
+        period, start = ABS_PERIODS_S[k % len(ABS_PERIODS_S)], corners_t[-1]
+        corners_t += [start + 0.25 * period, start + 0.35 * period, start + period]
+        corners_p += [low, low, level]
+    corners_t += [corners_t[-1] + 0.1, corners_t[-1] + 0.1 + rest_s]
+    corners_p += [0.0, 0.0]
+    time = np.arange(int(round(corners_t[-1] * SAMPLE_RATE_HZ)) + 1) / SAMPLE_RATE_HZ
+    pressure = np.interp(time, corners_t, corners_p)
+    label = f"ABS-like train of {pulses} pulses, {level / 1e6:.2f} MPa less {depth:.0%}"
+    return Excitation(time, pressure, ModelInput.MASTER_CYLINDER_PRESSURE, label)
+
+
+def procedure(
+    max_pressures: Sequence[float] = SEED_MAX_PRESSURES,
+    *,
+    pulsing_s: float = 5.0,
+    pulsing_hz: float = 5.0,
+) -> Excitation:
+    """A test procedure: pulsing at each pressure, a sweep, a slow ramp, an ABS-like train.
+
+    In a row, each after a :data:`PROCEDURE_HOLD_S` hold: :func:`seed_pulsing` at
+    ``max_pressures`` (Pa); a 5-25 Hz :func:`frequency_sweep` over ``2 * pulsing_s`` about
+    the last pulsing's mean; a release to rest, then a :func:`pressure_ramp` to the highest
+    pressure rising and falling over ``0.8 * pulsing_s`` each (at least 1 s); an
+    :func:`abs_pulse_train` at 80 % of the highest pressure.
+    """
+    top = max(max_pressures)
+    pulsing = seed_pulsing(max_pressures, pulsing_s=pulsing_s, pulsing_hz=pulsing_hz)
+    sweep = frequency_sweep(0.78 * top, 0.22 * top, ramp_s=1.0, sweep_s=2.0 * pulsing_s)
+    slow = max(0.8 * pulsing_s, 1.0)
+    ramp = pressure_ramp(top, rest_s=PROCEDURE_HOLD_S, rise_s=slow, fall_s=slow)
+    train = abs_pulse_train(0.8 * top)
+    parts: list[FloatArray] = [pulsing.pressure]
+    for part in (sweep.pressure[int(round(SAMPLE_RATE_HZ)) :], ramp.pressure, train.pressure):
+        level = float(parts[-1][-1])
+        parts.append(np.full(int(round(PROCEDURE_HOLD_S * SAMPLE_RATE_HZ)), level))
+        parts.append(_blend(level, float(part[0]), 0.5))
+        parts.append(part)
+    pressure = np.concatenate(parts)
+    time = np.arange(pressure.size) / SAMPLE_RATE_HZ
+    label = (
+        f"procedure: pulsing {pulsing_hz:g} Hz at "
+        f"{', '.join(f'{p / 1e6:.2f}' for p in max_pressures)} MPa, {pulsing_s:g} s each; "
+        f"{sweep.label}; {ramp.label}; {train.label}"
+    )
+    return Excitation(time, pressure, ModelInput.MASTER_CYLINDER_PRESSURE, label)
+
+
+def named_excitation(
+    kind: str, max_pressures: Sequence[float], *, pulsing_s: float, pulsing_hz: float
+) -> Excitation:
+    """The master-cylinder pressure ``p_i`` of one of :data:`EXCITATION_KINDS`.
+
+    ``pulsing``: :func:`seed_pulsing`; ``ramp``: :func:`pressure_ramp` to the highest of
+    ``max_pressures`` (Pa); ``sweep``: 5-25 Hz over ``2 * pulsing_s`` about 78 % of it
+    (+- 22 %); ``procedure``: :func:`procedure`.
+
+    Raises:
+        EffectError: an unknown kind.
+    """
+    top = max(max_pressures)
+    if kind == "pulsing":
+        return seed_pulsing(max_pressures, pulsing_s=pulsing_s, pulsing_hz=pulsing_hz)
+    if kind == "ramp":
+        return pressure_ramp(top)
+    if kind == "sweep":
+        return frequency_sweep(0.78 * top, 0.22 * top, sweep_s=2.0 * pulsing_s)
+    if kind == "procedure":
+        return procedure(max_pressures, pulsing_s=pulsing_s, pulsing_hz=pulsing_hz)
+    raise EffectError(f"unknown excitation {kind!r} (known: {', '.join(EXCITATION_KINDS)})")
+
+
+def air_driven(rig: Rig, excitation: Excitation) -> Excitation:
+    """The air pressure ``p_a`` (Pa) that drives a master-cylinder pressure through ``rig``.
+
+    ``p_i`` times the master cylinder's static gain ``A_i / A_a`` (eq. 21a): a proportional
+    regulator behind the air cylinder, its lag left to the master cylinder's dynamics.
+    """
+    master = rig.master_cylinder
+    gain = (master.diameter / master.air_piston_diameter) ** 2  # A_i / A_a
+    label = f"{excitation.label}, air-driven"
+    return Excitation(excitation.time, excitation.pressure * gain, ModelInput.AIR_PRESSURE, label)

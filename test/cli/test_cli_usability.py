@@ -51,6 +51,7 @@ def test_every_option_of_every_command_has_help() -> None:
 
 def test_the_parsers_copies_of_simulator_values_agree() -> None:
     assert parser.EXCITATIONS == app_simulate.EXCITATIONS
+    assert parser.LTI_EXCITATIONS == app_simulate.LTI_EXCITATIONS
     assert parser.SOLVER_METHOD == simulator.SOLVER_METHOD
     assert parser.RELATIVE_TOLERANCE == simulator.RELATIVE_TOLERANCE
     effect_help = next(

@@ -29,7 +29,10 @@ def test_the_shipped_baseline_passes() -> None:
     assert result.returncode == 0, result.stdout + result.stderr
     assert "every metric within its tolerance" in result.stdout
     rows = [line for line in result.stdout.splitlines() if line.startswith("one_washer_lti ")]
-    assert len(rows) == 9 and all(row.endswith("ok") for row in rows)
+    top = [row for row in rows if " s: " not in row]  # then each segment's own rows
+    assert len(top) == 9 and all(row.endswith("ok") for row in rows)
+    segments = {row.split(" s: ")[0].split()[-2] for row in rows if " s: " in row}
+    assert segments == {"ramp", "pulsing"} and len(rows) == 9 + 6 * 3 * 3
 
 
 def test_update_writes_a_baseline_and_a_moved_metric_exits_1(tmp_path: Path) -> None:
@@ -57,8 +60,8 @@ def test_update_writes_a_baseline_and_a_moved_metric_exits_1(tmp_path: Path) -> 
     assert [line for line in moved.stdout.splitlines() if line.endswith("MOVED")] == [
         line
         for line in moved.stdout.splitlines()
-        if line.startswith("b ") and "ptp_ratio" in line and "p_b" in line
-    ]
+        if line.startswith("b ") and "ptp_ratio" in line and "p_b" in line and " s: " not in line
+    ]  # the bag's metric moved; its segments' own rows (``pulsing 1.0-6.0 s: ...``) held
     new = regress(
         bags / "a", "--baseline", tmp_path / "other.json", "--model", CONFIG / "rig_default.yaml"
     )
@@ -90,7 +93,8 @@ def test_a_ramp_and_a_sweep_are_scored_per_segment_against_the_shipped_baseline(
     assert "2 segments (ramp, sweep), metrics over non-idle" in result.stdout
     for name in ("ramp_one_washer", "sweep_one_washer"):
         rows = [line for line in result.stdout.splitlines() if line.startswith(f"{name} ")]
-        assert len(rows) == 9 and all(row.endswith("ok") for row in rows)
+        top = [row for row in rows if " s: " not in row]  # then each segment's own rows
+        assert len(top) == 9 and len(rows) > 9 and all(row.endswith("ok") for row in rows)
     stored = json.loads((PROJECT / "bags" / "baseline.json").read_text())["bags"]
     assert stored["sweep_one_washer"]["basis"] == "non_idle_segments"
     kinds = [s["kind"] for s in stored["sweep_one_washer"]["segment_metrics"]]

@@ -141,3 +141,59 @@ def test_a_selection_by_kind_keeps_the_cases_of_the_full_schedule() -> None:
     full = {s.number: s for s in plan_cases(max(s.number for s in nulls) + 1, seed=3)}
     assert all(full[s.number] == s for s in nulls)
     assert select_cases(4, seed=3) == plan_cases(4, seed=3)
+
+
+def _files(folder: Path) -> dict[str, bytes]:
+    return {
+        str(path.relative_to(folder)): path.read_bytes()
+        for path in sorted(folder.rglob("*"))
+        if path.is_file()
+    }
+
+
+def test_the_default_excitation_makes_exactly_the_pulsing_cases(tmp_path: Path) -> None:
+    """``--excitation pulsing`` (the default): the same seeds give the same files."""
+    spec = plan_cases(3, seed=7)[1]
+    truth = nominal_rigs()[spec.nominal_key]
+    default = case_excitation(spec, truth, 0.4)
+    named = case_excitation(spec, truth, 0.4, kind="pulsing")
+    np.testing.assert_array_equal(default.pressure, named.pressure)
+    assert default.label == named.label and "procedure" not in default.label
+    made = []
+    for name, options in (
+        ("default", CaseOptions(pulsing_s=0.4)),
+        ("pulsing", CaseOptions(pulsing_s=0.4, drive=CaseDrive(excitation="pulsing"))),
+    ):
+        labels = json.loads(generate_cases(tmp_path / name, 2, 7, options).read_text())
+        for case in labels["cases"].values():
+            assert "excitation_kind" not in case
+            case.pop("simulation_seconds")  # wall time
+        assert "excitation" not in labels["generator"]  # labels as they always were
+        made.append((_files(tmp_path / name / "cases"), labels))
+    assert made[0] == made[1]
+
+
+def test_procedure_cases_record_their_excitation(tmp_path: Path) -> None:
+    drive = CaseDrive(excitation="procedure")
+    labels_path = generate_cases(tmp_path / "bench", 1, 4, CaseOptions(pulsing_s=0.5, drive=drive))
+    document = json.loads(labels_path.read_text())
+    assert document["generator"]["excitation"] == "procedure"
+    case = document["cases"]["000"]
+    assert case["excitation_kind"] == "procedure"
+    assert case["excitation"].startswith("procedure: pulsing 5 Hz")
+    recording = read_recording(tmp_path / "bench" / "cases" / "000" / "recording")
+    pulsing_only = 3 * 1500  # 1 s ramp and 0.5 s of pulsing per pressure
+    assert recording.time.size > 3 * pulsing_only
+
+
+@pytest.mark.parametrize("family", ["b", "c"])
+def test_every_family_takes_another_excitation(tmp_path: Path, family: str) -> None:
+    drive = CaseDrive(excitation="ramp")
+    options = CaseOptions(pulsing_s=0.5, drive=drive, family=family)
+    labels = json.loads(generate_cases(tmp_path / "bench", 1, 5, options).read_text())
+    case = labels["cases"]["000"]
+    assert case["family"] == family and case["excitation_kind"] == "ramp"
+    assert case["excitation"].startswith("ramp to 2.76 MPa")
+    recording = read_recording(tmp_path / "bench" / "cases" / "000" / "recording")
+    assert recording.time.size == 8001  # the ramp's 8 s, not 3 pulsing segments
+    assert np.max(recording.master_cylinder_pressure) == pytest.approx(2.76e6, rel=0.05)

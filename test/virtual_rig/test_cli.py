@@ -78,3 +78,19 @@ def test_cases_writes_recordings_and_labels_apart(tmp_path: Path) -> None:
     assert json.loads((out / "labels.json").read_text())["cases"]["000"]["kind"] == "null"
     again = brake_hil("cases", "--out", out, "--count", "1")
     assert "not empty" in _one_error_line(again)
+
+
+def test_cases_takes_another_excitation(tmp_path: Path) -> None:
+    out = tmp_path / "bench"
+    result = brake_hil(
+        "cases", "--out", out, "--count", "1", "--excitation", "ramp", "--family", "c"
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    labels = json.loads((out / "labels.json").read_text())
+    assert labels["generator"]["excitation"] == "ramp"
+    assert labels["cases"]["000"]["excitation"].startswith("ramp to 2.76 MPa")
+    topics = {
+        topic.name: topic.message_count
+        for topic in list_topics(out / "cases" / "000" / "recording")
+    }
+    assert topics["/brake/caliper/displacement"] == 8001

@@ -79,3 +79,49 @@ def test_seed_and_solenoid_pulsing_build_from_one_schedule(nominal_rig: Rig) -> 
     solenoid_from_schedule = solenoid_pulsing_from(nominal_rig, schedule)
     assert solenoid.pressure.tobytes() == solenoid_from_schedule.pressure.tobytes()
     assert solenoid.time.size == schedule.samples
+
+
+def _kinds(excitation: Excitation) -> list[str]:
+    from brake_hil.analysis import signals
+    from brake_hil.analysis.segmentation import find_segments
+
+    filtered = signals.lowpass(excitation.pressure, 1000.0)
+    return [
+        s.kind + ("*" if s.steady else "")
+        for s in find_segments(excitation.time, filtered, 1000.0, 5.0)
+    ]
+
+
+def test_a_procedure_chains_pulsing_a_sweep_a_slow_ramp_and_an_abs_train() -> None:
+    """Pulsing at three pressures, a 5-25 Hz sweep, a ramp and release, an ABS-like train."""
+    from brake_hil.virtual_rig.excitation import procedure
+
+    drive = procedure(SEED_MAX_PRESSURES, pulsing_s=3.0)
+    kinds = _kinds(drive)
+    assert kinds.count("pulsing*") == 3  # steady, the paper's Tables 3-5 apply
+    sweep = kinds.index("sweep")
+    assert kinds.index("ramp", sweep) < kinds.index("modulated", sweep)
+    rises = [k for k in kinds[sweep:] if k == "ramp"]
+    assert len(rises) >= 2  # the slow rise and its release
+    assert drive.pressure.max() == pytest.approx(max(SEED_MAX_PRESSURES), rel=1e-3)
+    assert drive.pressure.min() >= 0.0
+    assert np.max(np.abs(np.diff(drive.pressure))) < 0.1e6  # no jump between parts (25 Hz: 95 kPa)
+    assert "procedure" in drive.label and "ABS" in drive.label
+
+
+def test_named_excitations_and_their_air_driven_form(nominal_rig: Rig) -> None:
+    from brake_hil.virtual_rig.excitation import EXCITATION_KINDS, air_driven, named_excitation
+
+    pressures = (1.0e6, 2.0e6)
+    for kind in EXCITATION_KINDS:
+        drive = named_excitation(kind, pressures, pulsing_s=1.0, pulsing_hz=5.0)
+        assert drive.kind is ModelInput.MASTER_CYLINDER_PRESSURE
+        assert drive.pressure.max() == pytest.approx(2.0e6, rel=0.01)
+        air = air_driven(nominal_rig, drive)
+        assert air.air_driven and "air-driven" in air.label
+        master = nominal_rig.master_cylinder
+        gain = (master.diameter / master.air_piston_diameter) ** 2
+        np.testing.assert_allclose(air.pressure, drive.pressure * gain)
+    assert "sweep" in _kinds(named_excitation("sweep", pressures, pulsing_s=2, pulsing_hz=5))
+    with pytest.raises(EffectError, match="unknown excitation 'chirp'"):
+        named_excitation("chirp", pressures, pulsing_s=1.0, pulsing_hz=5.0)

@@ -68,6 +68,15 @@ class CasesVerb(Verb):
             help="pulsing frequency of every case (default: the nominal rig's, 5 Hz)",
         )
         parser.add_argument(
+            "--excitation",
+            choices=("pulsing", "sweep", "ramp", "procedure"),
+            default="pulsing",
+            help="what drives every case: pulsing (default: ramp then pulsing per pressure); "
+            "sweep (5-25 Hz over --pulsing-seconds x 2); ramp (rise, hold, fall to the "
+            "highest pressure); procedure (pulsing at each pressure, a 5-25 Hz sweep, a slow "
+            "ramp and release, an ABS-like pressure-pulse train, chained)",
+        )
+        parser.add_argument(
             "--max-pressures",
             type=_megapascals,
             default=None,
@@ -106,12 +115,12 @@ class CasesVerb(Verb):
 
 
 def case_drive(args: argparse.Namespace) -> CaseDrive:
-    """The cases' drive from ``--excitation-hz`` and ``--max-pressures`` (the paper's)."""
-    from brake_hil.virtual_rig.cases import CaseDrive
+    """The cases' drive: ``--excitation-hz``, ``--max-pressures``, ``--excitation``."""
+    from brake_hil.virtual_rig.cases import SEED_DRIVE, CaseDrive
 
-    if args.max_pressures is None:
-        return CaseDrive(args.excitation_hz)
-    return CaseDrive(args.excitation_hz, args.max_pressures)
+    excitation = getattr(args, "excitation", "pulsing")
+    pressures = SEED_DRIVE.max_pressures if args.max_pressures is None else args.max_pressures
+    return CaseDrive(args.excitation_hz, pressures, excitation)
 
 
 def _megapascals(text: str) -> tuple[float, ...]:

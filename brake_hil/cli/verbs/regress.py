@@ -14,7 +14,8 @@ from brake_hil.cli.workers import add_workers_arguments, workers_from_args
 
 if TYPE_CHECKING:
     from brake_hil.app.parallel import Outcome
-    from brake_hil.app.regress import MetricCheck, Plan, Regression, ReplayResult
+    from brake_hil.app.regress import MetricCheck, Regression, ReplayResult
+    from brake_hil.app.regress_plan import Plan
 
 __all__ = ["RegressVerb", "format_checks"]
 
@@ -103,11 +104,13 @@ def _print_replays(result: Regression) -> None:
     """Each replay, the totals, each recording skipped, and the checks' table."""
     for key, replay in result.results.items():
         source = result.sources.get(key, "")
-        if replay.scored_segments:  # no steady pulsing: every segment scored
-            kinds = ", ".join(dict.fromkeys(str(s["kind"]) for s in replay.scored_segments))
+        kinds = ", ".join(dict.fromkeys(str(s["kind"]) for s in replay.scored_segments))
+        if replay.basis == "non_idle_segments":  # no steady pulsing: every segment scored
             scored = f"{len(replay.scored_segments)} segments ({kinds}), metrics over non-idle"
         else:
             scored = f"{len(replay.segments)} steady segments scored"
+            if replay.scored_segments:
+                scored += f"; {len(replay.scored_segments)} segments ({kinds}) each scored"
         print(
             f"{key}: {replay.samples} samples ({replay.duration_s:.1f} s) replayed through "
             f"{replay.model_file} ({source}) at {replay.replay_factor:.0f}x real time, {scored}"
@@ -173,17 +176,22 @@ def _status(result: Regression) -> int:
 
 
 def format_checks(checks: tuple[MetricCheck, ...]) -> list[str]:
-    """The table ``regress`` prints: one line per bag, channel and metric."""
+    """The table ``regress`` prints: one line per bag, channel and metric.
+
+    A segment's metric is named after its segment (``sweep 11.0-21.0 s: nrmse``).
+    """
     width = max([len(c.bag) for c in checks] + [3])
+    names = [f"{c.segment}: {c.metric}" if c.segment else c.metric for c in checks]
+    named = max([len(name) for name in names] + [15])
     lines = [
-        f"{'bag':{width}s}  {'channel':7s} {'metric':15s}{'baseline':>12s}{'now':>12s}"
+        f"{'bag':{width}s}  {'channel':7s} {'metric':{named}s}{'baseline':>12s}{'now':>12s}"
         f"{'delta':>11s}{'tol':>9s}  status"
     ]
-    for c in checks:
+    for c, metric in zip(checks, names):
         baseline = "-" if c.baseline is None else f"{c.baseline:.5g}"
         delta = "-" if c.baseline is None else f"{c.delta:+.3g}"
         lines.append(
-            f"{c.bag:{width}s}  {c.channel:7s} {c.metric:15s}{baseline:>12s}{c.value:12.5g}"
+            f"{c.bag:{width}s}  {c.channel:7s} {metric:{named}s}{baseline:>12s}{c.value:12.5g}"
             f"{delta:>11s}{c.tolerance:9.3g}  {c.status}"
         )
     return lines

@@ -20,6 +20,7 @@ from brake_hil.physics.catalogue import CATALOGUE
 
 __all__ = [
     "EXCITATIONS",
+    "LTI_EXCITATIONS",
     "RELATIVE_TOLERANCE",
     "SOLVER_METHOD",
     "SimulateVerb",
@@ -28,8 +29,10 @@ __all__ = [
     "uses_virtual_rig",
 ]
 
-EXCITATIONS = ("pulsing", "solenoid", "ramp", "sweep")
+EXCITATIONS = ("pulsing", "solenoid", "ramp", "sweep", "procedure")
 """``brake_hil.app.simulate.EXCITATIONS``."""
+LTI_EXCITATIONS = ("pulsing", "ramp", "sweep", "procedure")
+"""``brake_hil.app.simulate.LTI_EXCITATIONS``: those ``--engine lti`` takes."""
 SOLVER_METHOD = "BDF"
 """``brake_hil.virtual_rig.simulator.SOLVER_METHOD``."""
 RELATIVE_TOLERANCE = 1.0e-4
@@ -89,7 +92,9 @@ def _add_virtual_rig_arguments(parser: argparse.ArgumentParser) -> None:
         choices=EXCITATIONS,
         help="pulsing: p_i ramp then 5 Hz (default); solenoid: air pressure through the "
         "master cylinder (eqs. 21a-b); ramp: rise, hold, fall to the highest pressure; "
-        "sweep: 5-25 Hz over --pulsing-seconds x 2",
+        "sweep: 5-25 Hz over --pulsing-seconds x 2; procedure: pulsing at each pressure, a "
+        "5-25 Hz sweep, a slow ramp and release, an ABS-like pulse train, chained. With "
+        "--engine lti: any but solenoid, on the LTI model",
     )
     group.add_argument(
         "--nominal", type=Path, help="the rig the engineer believes (YAML; default: --rig)"
@@ -110,8 +115,12 @@ def uses_virtual_rig(args: argparse.Namespace) -> bool:
         BrakeHilError: a virtual-rig option with ``--engine lti``.
     """
     given = [name for name in _VIRTUAL_OPTIONS if getattr(args, name, None) is not None]
+    if args.engine == "lti" and getattr(args, "excitation", None) in LTI_EXCITATIONS:
+        given.remove("excitation")  # the LTI model takes any p_i
     if args.engine == "lti" and given:
         options = ", ".join("--" + name.replace("_", "-") for name in given)
+        if "excitation" in given:  # the one the LTI model takes in other values
+            options = options.replace("--excitation", f"--excitation {args.excitation}")
         raise BrakeHilError(f"{options} need the virtual rig; drop --engine lti")
     return args.engine == "virtual" or bool(given)
 
@@ -120,7 +129,14 @@ def simulate_lti(args: argparse.Namespace) -> int:
     """``brake-hil simulate`` of the LTI model."""
     from brake_hil.app.simulate import run_simulate
 
-    result = run_simulate(args.rig, args.out, args.max_pressure, args.pulsing_seconds, args.seed)
+    result = run_simulate(
+        args.rig,
+        args.out,
+        args.max_pressure,
+        args.pulsing_seconds,
+        args.seed,
+        getattr(args, "excitation", None) or "pulsing",
+    )
     print(f"wrote {result.out} ({result.samples} samples, {result.duration_s:.1f} s)")
     return 0
 
