@@ -12,6 +12,7 @@ from contextlib import contextmanager
 import os
 from pathlib import Path
 import signal
+import struct
 import subprocess
 import sys
 import threading
@@ -19,7 +20,8 @@ import time
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from mcap.reader import make_reader
+from mcap.exceptions import McapError
+from mcap.reader import NonSeekingReader, make_reader
 from mcap_ros2.decoder import DecoderFactory
 import numpy as np
 import pytest
@@ -148,13 +150,33 @@ def listed_files(bag: Path) -> list[str]:
     return list(info["relative_file_paths"])
 
 
+def decoded_messages(stream: Any) -> Iterator[tuple[Any, Any, Any, Any]]:
+    """Every message of one MCAP file, decoded; a file cut mid-record read up to the cut.
+
+    The indexed reader needs the footer; a recorder killed while writing a chunk leaves
+    partial bytes where its last footer was, so such a file is read from its start, record
+    by record, up to the first record the kill cut short.
+    """
+    try:
+        make_reader(stream).get_summary()
+    except McapError:
+        stream.seek(0)
+        reader = NonSeekingReader(stream, decoder_factories=[DecoderFactory()])
+        try:  # in file order: the recorder writes each topic's messages in time order
+            yield from reader.iter_decoded_messages(log_time_order=False)
+        except (McapError, struct.error):  # the record the kill cut short
+            return
+        return
+    stream.seek(0)
+    yield from make_reader(stream, decoder_factories=[DecoderFactory()]).iter_decoded_messages()
+
+
 def values_by_topic(bag: Path) -> dict[str, list[float]]:
     """Each topic's values in log-time order, decoded by mcap_ros2 from every listed file."""
     found: dict[str, list[float]] = {}
     for name in listed_files(bag):
         with (bag / name).open("rb") as stream:
-            reader = make_reader(stream, decoder_factories=[DecoderFactory()])
-            for _schema, channel, message, decoded in reader.iter_decoded_messages():
+            for _schema, channel, message, decoded in decoded_messages(stream):
                 if channel.topic == "/diagnostics":
                     value = float(decoded.status[0].message)
                 else:
