@@ -15,8 +15,9 @@ import numpy as np
 
 from brake_hil.analysis import signals
 from brake_hil.diagnosis import segment_evidence
-from brake_hil.diagnosis.dataset import Dataset, Window
+from brake_hil.diagnosis.dataset import Dataset
 from brake_hil.diagnosis.fitting import Model
+from brake_hil.diagnosis.segment_evidence import SegmentSignals
 from brake_hil.topics import OUTPUT_CHANNELS
 from brake_hil.types import FloatArray
 
@@ -35,17 +36,6 @@ class Evidence:
     windows: list[tuple[float, float]]  # s, where the mismatch is largest
     phase_profile: dict[str, list[float]] = field(default_factory=dict)  # RMS residual per bin
     harmonics: dict[str, dict[str, list[float]]] = field(default_factory=dict)
-
-
-@dataclass(frozen=True)
-class SegmentSignals:
-    """Measured and baseline-predicted signals over one segment's window."""
-
-    window: Window
-    time: FloatArray
-    pressure: FloatArray
-    measured: dict[str, FloatArray]
-    predicted: dict[str, FloatArray]
 
 
 def segment_signals(model: Model, theta: FloatArray) -> list[SegmentSignals]:

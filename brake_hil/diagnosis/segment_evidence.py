@@ -16,20 +16,19 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Final
+from dataclasses import dataclass
+from typing import Final
 
 import numpy as np
 
 from brake_hil.analysis import segment_metrics
 from brake_hil.analysis.segmentation import Segment
+from brake_hil.diagnosis.dataset import Dataset, Window
 from brake_hil.errors import SignalError
 from brake_hil.topics import OUTPUT_CHANNELS
+from brake_hil.types import FloatArray
 
-if TYPE_CHECKING:
-    from brake_hil.diagnosis.dataset import Dataset
-    from brake_hil.diagnosis.evidence import SegmentSignals
-
-__all__ = ["collect", "missing"]
+__all__ = ["SegmentSignals", "collect", "missing"]
 
 EDGE_BANDS: Final = 3
 """A sweep's low (high) end is the mean of its first (last) this many bands."""
@@ -55,6 +54,17 @@ LEVELS_ADVICE: Final = (
     "pulsing at three pressures would tell a seal whose stiffness falls with the amplitude "
     "(stick-slip) from air whose compliance falls with the pressure"
 )
+
+
+@dataclass(frozen=True)
+class SegmentSignals:
+    """Measured and baseline-predicted signals over one segment's window."""
+
+    window: Window
+    time: FloatArray
+    pressure: FloatArray
+    measured: dict[str, FloatArray]
+    predicted: dict[str, FloatArray]
 
 
 def collect(

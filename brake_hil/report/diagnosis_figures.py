@@ -281,10 +281,16 @@ def figures(diagnosis: Diagnosis) -> Figures:
             if steady
             else ()
         ),
-        (
-            _loop_plot(loops),
-            "seal hysteresis loop",
-            loop_caption(errors["baseline"], errors["improved"]),
+        *(
+            (
+                (
+                    _loop_plot(loops),
+                    "seal hysteresis loop",
+                    loop_caption(errors["baseline"], errors["improved"]),
+                ),
+            )
+            if steady  # two held-out cycles; a ramp's loop is on its static map
+            else ()
         ),
         *segment_figures(diagnosis),
     )
