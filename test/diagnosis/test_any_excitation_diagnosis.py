@@ -97,3 +97,35 @@ def test_the_bundled_ramp_and_sweep_are_diagnosed(name: str, shows: str, tmp_pat
     page = result.report_path.read_text()
     alt = "static map over the ramps" if name.startswith("ramp") else "frequency response"
     assert alt in page
+
+
+def test_a_procedure_keeps_its_pulsing_windows_and_adds_the_sweep_and_ramps() -> None:
+    """A virtual-rig procedure: pulsing at 5 Hz, a 5-25 Hz sweep, a slow rise and fall."""
+    import numpy as np
+
+    from brake_hil.physics.rig import load_rig
+    from brake_hil.virtual_rig.excitation import (
+        Excitation,
+        frequency_sweep,
+        pressure_ramp,
+        seed_pulsing,
+    )
+    from brake_hil.virtual_rig.simulator import simulate_rig
+    from test.conftest import CONFIG
+
+    pulsing = seed_pulsing((1.38e6,), pulsing_s=4.0)
+    sweep = frequency_sweep(float(pulsing.pressure[-1]), 0.3e6, sweep_s=6.0)
+    step = float(pulsing.time[1] - pulsing.time[0])
+    start = int(round(1.0 / step))  # after the sweep's own ramp
+    ramp = pressure_ramp(2.76e6, rest_s=0.5)
+    pressure = np.concatenate([pulsing.pressure, sweep.pressure[start:], ramp.pressure])
+    excitation = Excitation(np.arange(pressure.size) * step, pressure, pulsing.kind, "procedure")
+    rig = load_rig(CONFIG / "rig_default.yaml")
+    ds = prepare(simulate_rig(rig, [], excitation, seed=5).as_recording(), rig)
+    kinds = [w.kind for w in ds.segments]
+    assert kinds[0] == "steady" and "sweep" in kinds and kinds.count("ramp") == 2
+    assert ds.noise_variance is None  # the steady pulsing's own noise estimate
+    alone = prepare(simulate_rig(rig, [], pulsing, seed=5).as_recording(), rig)
+    steady = [t for w in ds.train if w.kind == "steady" for t in (w.start, w.end)]
+    assert steady == pytest.approx([t for w in alone.train for t in (w.start, w.end)], abs=0.02)
+    assert {"steady", "sweep", "ramp"} <= {w.kind for w in ds.held_out}
