@@ -74,6 +74,11 @@ HELD_OUT_ERROR = (
     "pressures, so NRMSE reads larger), squared and averaged over the three channels; a "
     "hypothesis's \"error cut\" is the baseline's held-out error over its own."
 )
+OTHER_WINDOWS = (
+    "A held-out window that is not pulsing (a sweep's last band, a ramp's part) is taken "
+    "whole: peak-to-peak ratio, lag over the rig's period T and NRMSE over the window, "
+    "weighted by its length in periods T."
+)
 FLAG_SIGMA = 3.0
 """A calibration multiplier this many prior sigmas from 1 is a finding about the rig file."""
 IDENTIFIED_RELATIVE_SIGMA = 0.5
@@ -340,8 +345,9 @@ def _metrics_table(diagnosis: Diagnosis) -> str:
             f"<td>{b['tau_over_T_pct']:+.2f}</td><td>{i['tau_over_T_pct']:+.2f}</td>"
             f"<td>{_nrmse(b['nrmse'])}</td><td>{_nrmse(i['nrmse'])}</td></tr>"
         )
+    other = "" if diagnosis.dataset.steady else f"<p>{OTHER_WINDOWS}</p>"
     return (
-        f"<p>{NRMSE_DEFINITION}</p><p>{HELD_OUT_ERROR}</p>"
+        f"<p>{NRMSE_DEFINITION}</p><p>{HELD_OUT_ERROR}</p>{other}"
         "<table><tr><th>channel</th><th>ptp % baseline</th><th>ptp % improved</th>"
         "<th>tau/T % baseline</th><th>tau/T % improved</th><th>NRMSE baseline</th>"
         "<th>NRMSE improved</th></tr>" + "".join(rows) + "</table>"
