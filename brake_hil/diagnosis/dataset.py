@@ -252,7 +252,12 @@ def split(segments: list[Window]) -> tuple[tuple[Window, ...], tuple[Window, ...
         else:  # a sweep, a modulated train, a ramp of a lone pair: its last share in time
             cut = window.start + (1.0 - HELD_OUT_SHARE) * (window.end - window.start)
         train.append(replace(window, end=cut))
-        lead = min(window.lead_in + cut - window.start, LEAD_IN_S)
+        # steady pulsing keeps its preroll; the others carry their history on
+        lead = (
+            window.lead_in
+            if window.capped
+            else min(window.lead_in + cut - window.start, LEAD_IN_S)
+        )
         held_out.append(replace(window, start=cut, lead_in=lead))
     return tuple(train), tuple(held_out)
 

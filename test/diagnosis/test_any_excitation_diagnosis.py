@@ -38,6 +38,8 @@ def test_each_kind_holds_out_its_later_part() -> None:
         )
     assert held[0].end - held[0].start == pytest.approx(1.2)  # 12 whole cycles of 0.1 s
     assert held[2].lead_in > 0.0  # a ramp's held part is simulated from before it
+    steady = Window(0.0, 3.0, 1e6, 0, period=0.2)
+    assert split([steady])[1][0].lead_in == 0.0  # steady pulsing keeps its 0.8 s preroll
     # two rises and two falls: the later pair is held out whole
     more = [rise, fall, Window(23, 26, 1.4e6, 4, "ramp"), Window(27, 30, 1.4e6, 5, "ramp")]
     train, held = split(more)
