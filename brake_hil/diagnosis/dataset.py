@@ -185,6 +185,8 @@ def prepare(recording: Recording, rig: Rig) -> Dataset:
             f"ramp of at least {SLOW_RAMP_S:g} s (segments: "
             f"{', '.join(s.kind for s in found) or 'none'})"
         )
+    ordered = sorted(segments, key=lambda w: w.start)  # in time (the index is its place)
+    segments = [replace(w, segment=k) for k, w in enumerate(ordered)]
     train, held_out = split(segments)
     step = max(int(round(rate / DIAGNOSIS_RATE)), 1)
     time = recording.time[::step]
