@@ -58,6 +58,7 @@ SLOW_TESTS: tuple[str, ...] = (
     # blind diagnoses in this process
     "test_a_blind_diagnosis_of_a_strong_leak_names_no_library_effect",
     "test_an_internal_error_on_one_case_is_recorded_the_rest_scored_and_exit_is_1",
+    "test_the_bundled_ramp_and_sweep_are_diagnosed",
     # the README's command blocks and benchmark scripts, each in a subprocess
     "test_readme_command_works_as_written",
     "test_each_benchmark_the_readme_names_starts_as_written",

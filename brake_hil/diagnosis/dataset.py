@@ -1,11 +1,25 @@
-"""A recording prepared for diagnosis: conditioned signals, steady windows, train/held-out split.
+"""A recording prepared for diagnosis: conditioned signals, windows, train/held-out split.
 
-The split keeps the held-out data out of every fit: the last 40 % of every steady segment's
-cycles is held out. Every pressure amplitude is then seen in training (the amplitude
-dependence is learnt, as the seed learns k_eh per experiment), and every candidate must
-predict cycles later in time than any it was fitted on, which is what exposes a drift. (A
-held-out middle segment would hide a drift: a calibration fitted to both ends is right in the
-middle.)
+The split keeps the held-out data out of every fit, within each segment kind, so every model
+must predict what it did not see:
+
+* steady pulsing (at the rig file's excitation frequency): the last 40 % of every steady
+  segment's cycles is held out. Every pressure amplitude is then seen in training (the
+  amplitude dependence is learnt, as the seed learns k_eh per experiment), and every
+  candidate must predict cycles later in time than any it was fitted on, which is what
+  exposes a drift. (A held-out middle segment would hide a drift: a calibration fitted to
+  both ends is right in the middle.)
+* pulsing at another frequency: the same, in its own cycles;
+* a sweep or a modulated train: its last 40 % in time (for a sweep, the band of frequencies
+  it ends on: a model fitted on 5-17 Hz must predict 17-25 Hz);
+* slow ramps (at least ``SLOW_RAMP_S``): the later ramps when there are ``LATER_RAMPS`` or
+  more (a second rise and fall), else the last 40 % of each (the top of a rise, the bottom
+  of a fall): every model sees both an apply and a release.
+
+A recording with steady pulsing keeps today's windows; sweeps, other pulsing, modulated
+trains and slow ramps beside it are added. Short rises (the approach to a pulsing level),
+steps, holds and idle are not windows; the simulation of a window that is not pulsing starts
+up to ``LEAD_IN_S`` before it (a ramp's seal remembers the rise before its fall).
 
 Signals are conditioned as the seed does (30 Hz zero-phase low-pass) and decimated to
 ``DIAGNOSIS_RATE`` for the fits (the 5 Hz excitation's first five harmonics stay far below
@@ -14,14 +28,16 @@ its Nyquist frequency).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.interpolate import CubicSpline  # type: ignore[import-untyped]
 
 from brake_hil.analysis import signals
-from brake_hil.analysis.comparison import conditioned_channels, steady_windows
+from brake_hil.analysis.comparison import conditioned_channels
 from brake_hil.analysis.recording import Recording
+from brake_hil.analysis.segmentation import Segment, find_segments
+from brake_hil.errors import SignalError
 from brake_hil.physics.rig import Rig
 from brake_hil.topics import OUTPUT_CHANNELS
 from brake_hil.types import FloatArray
@@ -29,6 +45,19 @@ from brake_hil.types import FloatArray
 DIAGNOSIS_RATE = 500.0
 """Sample rate (Hz) of the signals the diagnosis fits."""
 HELD_OUT_SHARE = 0.4
+SLOW_RAMP_S = 2.0
+"""A ramp lasting at least this long (s) is a window: a slow ramp maps the static response;
+a shorter rise is the approach to a pulsing level."""
+LATER_RAMPS = 4
+"""With this many slow ramps (two rises and two falls) the later ones are held out; with
+fewer, the last ``HELD_OUT_SHARE`` of each: fitted on a rise alone, a seal's release is not
+identified (its release stiffness came out unbounded on the bundled ramp)."""
+LEAD_IN_S = 6.0
+"""A window that is not pulsing is simulated from up to this long before it (s), so that
+its history (the rise before a fall, the ramp before a sweep) is in its prediction."""
+NOISE_BAND_HZ = 150.0
+"""The raw channels above this frequency hold noise alone (no segment kind reaches it): the
+estimate of the noise where nothing repeats (:func:`noise_variances`)."""
 
 
 @dataclass(frozen=True)
@@ -38,7 +67,11 @@ class Window:
     start: float
     end: float
     mean_pressure: float
-    segment: int  # index of the steady segment it belongs to
+    segment: int  # index of the segment it belongs to
+    kind: str = "steady"  # steady (pulsing at the rig's frequency), or a segmentation kind
+    lead_in: float = 0.0  # s simulated before ``start`` at least (a ramp's history)
+    capped: bool = True  # a fit takes only its first FIT_SPAN s (steady pulsing repeats)
+    period: float = 0.0  # s, of a pulsing window (0 for the others)
 
 
 @dataclass(frozen=True)
@@ -54,6 +87,8 @@ class Dataset:
     segments: tuple[Window, ...]
     period: float  # s
     sample_time: float  # s
+    noise_variance: dict[str, float] | None = None  # conditioned noise (no steady window)
+    found: tuple[Segment, ...] = ()  # every segment of the recording (segmentation)
 
     def mask(self, windows: tuple[Window, ...]) -> FloatArray:
         """Boolean mask of the samples inside ``windows``."""
@@ -63,7 +98,7 @@ class Dataset:
         return inside
 
     def scale(self) -> dict[str, float]:
-        """Peak-to-peak of each measured channel over the steady segments (normaliser)."""
+        """Peak-to-peak of each measured channel over the segments (normaliser)."""
         inside = self.mask(self.segments)
         return {key: float(np.ptp(value[inside])) for key, value in self.measured.items()}
 
@@ -79,7 +114,13 @@ class Dataset:
         over the half sample as noise (300-2000 times the noise on four 8 Hz recordings). The
         conditioned signals are low-passed far below the sample rate, so their noise keeps
         its variance through the interpolation.
+
+        With no steady pulsing, nothing repeats: the noise is the raw channels' own above
+        ``NOISE_BAND_HZ``, carried to the conditioned band (:func:`noise_variances`).
         """
+        steady = tuple(w for w in self.segments if w.kind == "steady")
+        if not steady:
+            return self._noise_without_cycles()
         per_period = self.period / self.sample_time
         lag = int(round(per_period))
         whole = abs(per_period - lag) < 1e-6
@@ -87,7 +128,7 @@ class Dataset:
         costs = []
         for key, value in self.measured.items():
             differences = []
-            for window in self.segments:
+            for window in steady:
                 part = value[self.mask((window,))]
                 if part.size <= lag:
                     continue
@@ -102,34 +143,155 @@ class Dataset:
             costs.append(variance / max(scale[key], 1e-30) ** 2)
         return float(np.mean(costs))
 
+    def _noise_without_cycles(self) -> float:
+        """:meth:`noise_cost` from ``noise_variance`` (0 when it is not known)."""
+        if not self.noise_variance:
+            return 0.0
+        scale = self.scale()
+        return float(
+            np.mean([v / max(scale[key], 1e-30) ** 2 for key, v in self.noise_variance.items()])
+        )
+
+    @property
+    def steady(self) -> bool:
+        """Every window is steady pulsing at the rig's frequency (today's recordings)."""
+        return all(w.kind == "steady" for w in self.segments)
+
 
 def prepare(recording: Recording, rig: Rig) -> Dataset:
-    """Condition, decimate and split a recording (see the module docstring)."""
+    """Condition, decimate and split a recording (see the module docstring).
+
+    Raises:
+        SignalError: nothing to diagnose (no pulsing, sweep, modulated train or slow
+            ramp), naming the recording.
+    """
     filtered = conditioned_channels(recording)
-    windows = steady_windows(recording, filtered["p_i"], rig)
-    step = max(int(round(recording.sample_rate / DIAGNOSIS_RATE)), 1)
-    time = recording.time[::step]
+    rate = recording.sample_rate
+    found = find_segments(recording.time, filtered["p_i"], rate, rig.excitation_hz)
     period = 1.0 / rig.excitation_hz
-    segments = []
-    for index, (start, end) in enumerate(windows):
+    segments: list[Window] = []
+    for start, end in [(s.t_start, s.t_end) for s in found if s.steady]:
         part = signals.segment_slice(recording.time, start, end)
-        segments.append(Window(start, end, float(np.mean(filtered["p_i"][part])), index))
-    train: list[Window] = []
-    held_out: list[Window] = []
-    for segment in segments:
-        cycles = int(round((segment.end - segment.start) / period))
-        kept = max(cycles - max(int(round(cycles * HELD_OUT_SHARE)), 1), 1)
-        cut = segment.start + kept * period
-        train.append(Window(segment.start, cut, segment.mean_pressure, segment.segment))
-        held_out.append(Window(cut, segment.end, segment.mean_pressure, segment.segment))
+        mean = float(np.mean(filtered["p_i"][part]))
+        segments.append(Window(start, end, mean, len(segments), period=period))
+    for segment in found:
+        if _usable(segment):
+            part = signals.segment_slice(recording.time, segment.t_start, segment.t_end)
+            mean = float(np.mean(filtered["p_i"][part]))
+            segments.append(_window(segment, mean, len(segments), float(recording.time[0])))
+    if not segments:
+        raise SignalError(
+            f"{recording.path}: nothing to diagnose: no pulsing, sweep, modulated train or "
+            f"ramp of at least {SLOW_RAMP_S:g} s (segments: "
+            f"{', '.join(s.kind for s in found) or 'none'})"
+        )
+    ordered = sorted(segments, key=lambda w: w.start)  # in time (the index is its place)
+    segments = [replace(w, segment=k) for k, w in enumerate(ordered)]
+    train, held_out = split(segments)
+    step = max(int(round(rate / DIAGNOSIS_RATE)), 1)
+    time = recording.time[::step]
+    steady = any(w.kind == "steady" for w in segments)
     return Dataset(
         name=str(recording.path),
         time=time,
         pressure=filtered["p_i"][::step],
         measured={key: filtered[key][::step] for key in OUTPUT_CHANNELS},
-        train=tuple(train),
-        held_out=tuple(held_out),
+        train=train,
+        held_out=held_out,
         segments=tuple(segments),
         period=period,
         sample_time=float(np.median(np.diff(time))),
+        noise_variance=None if steady else noise_variances(recording),
+        found=tuple(found),
     )
+
+
+def _usable(segment: Segment) -> bool:
+    """A segment that is a window beside the steady ones (see the module docstring)."""
+    if segment.steady:
+        return False
+    if segment.kind == "ramp":
+        return segment.duration >= SLOW_RAMP_S
+    return segment.kind in ("pulsing", "sweep", "modulated")
+
+
+def _window(segment: Segment, mean: float, index: int, first_time: float) -> Window:
+    """The window of a segment that is not steady pulsing."""
+    period = 0.0
+    if segment.kind == "pulsing":
+        period = 1.0 / float(segment.descriptors["frequency_hz"])
+    lead = min(segment.t_start - first_time, LEAD_IN_S)
+    return Window(
+        segment.t_start,
+        segment.t_end,
+        mean,
+        index,
+        kind=segment.kind,
+        lead_in=lead,
+        capped=False,
+        period=period,
+    )
+
+
+def split(segments: list[Window]) -> tuple[tuple[Window, ...], tuple[Window, ...]]:
+    """Training and held-out windows, within each segment kind (the module docstring)."""
+    train: list[Window] = []
+    held_out: list[Window] = []
+    ramps = [w for w in segments if w.kind == "ramp"]
+    later = int(round(len(ramps) * HELD_OUT_SHARE)) if len(ramps) >= LATER_RAMPS else 0
+    held_ramps = ramps[len(ramps) - later :] if later else []
+    for window in segments:
+        if window in held_ramps:
+            held_out.append(window)
+            continue
+        if window.kind == "ramp" and later:
+            train.append(window)
+            continue
+        if window.period > 0.0:  # pulsing: whole cycles of its own period
+            cycles = int(round((window.end - window.start) / window.period))
+            kept = max(cycles - max(int(round(cycles * HELD_OUT_SHARE)), 1), 1)
+            cut = window.start + kept * window.period
+        else:  # a sweep, a modulated train, a ramp of a lone pair: its last share in time
+            cut = window.start + (1.0 - HELD_OUT_SHARE) * (window.end - window.start)
+        train.append(replace(window, end=cut))
+        # steady pulsing keeps its preroll; the others carry their history on
+        lead = (
+            window.lead_in
+            if window.capped
+            else min(window.lead_in + cut - window.start, LEAD_IN_S)
+        )
+        held_out.append(replace(window, start=cut, lead_in=lead))
+    return tuple(train), tuple(held_out)
+
+
+def noise_variances(recording: Recording) -> dict[str, float]:
+    """Each output's noise variance after the conditioning (30 Hz low-pass), in its unit^2.
+
+    From its raw samples above ``NOISE_BAND_HZ`` (white noise: the same density over the
+    whole band). The share of a white noise's variance the conditioning keeps is measured on
+    a seeded white noise of the recording's length and rate. Empty when the rate leaves no
+    band above ``NOISE_BAND_HZ``.
+    """
+    rate = recording.sample_rate
+    nyquist = 0.5 * rate
+    if nyquist <= 1.5 * NOISE_BAND_HZ:
+        return {}
+    white = np.random.default_rng(0).standard_normal(recording.time.size)
+    kept = float(np.var(signals.lowpass(white, rate)))
+    band = float(np.var(_highpass(white, rate)))
+    result = {}
+    for key, value in recording.measured().items():
+        if value is None:
+            continue
+        high = float(np.var(_highpass(value, rate)))
+        result[key] = high / max(band, 1e-30) * kept
+    return result
+
+
+def _highpass(values: FloatArray, rate: float) -> FloatArray:
+    """Zero-phase Butterworth high-pass above ``NOISE_BAND_HZ`` (third order)."""
+    from scipy import signal as sps  # type: ignore[import-untyped]
+
+    sos = sps.butter(3, NOISE_BAND_HZ, btype="highpass", fs=rate, output="sos")
+    filtered: FloatArray = np.asarray(sps.sosfiltfilt(sos, values), dtype=np.float64)
+    return filtered

@@ -25,9 +25,10 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from brake_hil.analysis import signals
+from brake_hil.analysis import segment_metrics, signals
 from brake_hil.analysis.characterization import characterize
 from brake_hil.analysis.recording import Recording
+from brake_hil.diagnosis import segment_evidence
 from brake_hil.diagnosis.calibration import Calibration, calibrate
 from brake_hil.diagnosis.candidates import CANDIDATES, candidate
 from brake_hil.diagnosis.dataset import Dataset, prepare
@@ -122,25 +123,51 @@ __all__ = [
 
 
 def held_out_metrics(model: Model, theta: FloatArray) -> Metrics:
-    """The seed's Table 4-5 metrics of a model over the held-out windows."""
+    """The seed's Table 4-5 metrics of a model over the held-out windows.
+
+    Pulsing windows per cycle (:func:`signals.cycle_metrics`), weighted by their cycles;
+    the others (a sweep's band, a ramp) over the window: peak-to-peak ratio, lag over the
+    rig's period ``T`` (as ``compare`` scores a recording without steady pulsing) and NRMSE,
+    weighted by their length in periods ``T``.
+    """
     ds = model.dataset
     result: Metrics = {}
-    collected: dict[str, list[signals.ChannelMetrics]] = {k: [] for k in OUTPUT_CHANNELS}
+    names = ("ptp_ratio_pct", "tau_over_T_pct", "nrmse")
+    collected: dict[str, list[tuple[float, ...]]] = {k: [] for k in OUTPUT_CHANNELS}
     for window in ds.held_out:
         outputs, index = model.simulate(window, theta[None, :])
         for c, key in enumerate(OUTPUT_CHANNELS):
-            collected[key].append(
-                signals.cycle_metrics(
-                    outputs[0, c], ds.measured[key][index], ds.time[index], ds.period
-                )
-            )
+            predicted, measured, time = outputs[0, c], ds.measured[key][index], ds.time[index]
+            if window.kind in ("steady", "pulsing"):
+                period = window.period or ds.period
+                m = signals.cycle_metrics(predicted, measured, time, period)
+                collected[key].append((m.cycles, *(getattr(m, name) for name in names)))
+            else:
+                collected[key].append(_span_metrics(predicted, measured, time, ds.period))
     for key, items in collected.items():
-        weights = np.array([m.cycles for m in items], dtype=float)
+        weights = np.array([m[0] for m in items], dtype=float)
         result[key] = {
-            name: float(np.average([getattr(m, name) for m in items], weights=weights))
-            for name in ("ptp_ratio_pct", "tau_over_T_pct", "nrmse")
+            name: float(np.average([m[1 + n] for m in items], weights=weights))
+            for n, name in enumerate(names)
         }
     return result
+
+
+def _span_metrics(
+    predicted: FloatArray, measured: FloatArray, time: FloatArray, period: float
+) -> tuple[float, float, float, float]:
+    """Weight (periods), ptp ratio (%), lag over ``period`` (%) and NRMSE of a window."""
+    lag = segment_metrics.lag_s(time, predicted, measured, slice(0, time.size), LAG_RANGE_S)
+    return (
+        (time[-1] - time[0]) / period,
+        100.0 * float(np.ptp(predicted)) / max(float(np.ptp(measured)), 1e-30),
+        100.0 * lag / period,
+        signals.nrmse(predicted, measured),
+    )
+
+
+LAG_RANGE_S = 0.05
+"""The longest lag (s) sought in a window that is not pulsing."""
 
 
 Progress = Callable[[str], None]
@@ -159,7 +186,10 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
     baseline_model = Model(calibration, [], dataset)
     baseline = fit(baseline_model)
     say("locating the mismatch")
-    table3 = characterize(recording, rig)
+    # the seed's Table 3 is of steady pulsing; the other kinds' evidence is their own
+    table3 = (
+        characterize(recording, rig) if any(w.kind == "steady" for w in dataset.segments) else []
+    )
     evidence = collect(baseline_model, baseline.theta, [(s.ptp_pressure, s.k_eh) for s in table3])
     fits = _Fits(calibration, dataset, baseline, say)
     for single in CANDIDATES:
@@ -196,6 +226,7 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
     )
     explanation = f"{words} {explanation}" if words and not verdict.effects else explanation
     explanation = f"{explanation} {words}" if words and verdict.effects else explanation
+    explanation = _with_advice(explanation, verdict, dataset)
     if verdict.effects != ("unexplained",):
         # the description is of the baseline's misfit, which the verdict explains or not
         residual = residual.reworded("the calibrated LTI baseline's misfit")
@@ -222,6 +253,20 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         air=air,
         groove=groove,
     )
+
+
+ADVICE_BELOW = 0.5
+"""Below this confidence (or unexplained) the explanation names the excitations that would
+tell more than the recording holds (:func:`segment_evidence.missing`)."""
+
+
+def _with_advice(explanation: str, verdict: Verdict, dataset: Dataset) -> str:
+    """``explanation`` with the excitations that would decide, when the verdict is unsure."""
+    advice = segment_evidence.missing(dataset)
+    unsure = verdict.confidence < ADVICE_BELOW or verdict.effects == ("unexplained",)
+    if not advice or not unsure:
+        return explanation
+    return f"{explanation} This recording holds too little to be sure: {'; '.join(advice)}."
 
 
 @dataclass

@@ -14,8 +14,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from brake_hil.analysis import signals
-from brake_hil.diagnosis.dataset import Dataset, Window
+from brake_hil.diagnosis import segment_evidence
+from brake_hil.diagnosis.dataset import Dataset
 from brake_hil.diagnosis.fitting import Model
+from brake_hil.diagnosis.segment_evidence import SegmentSignals
 from brake_hil.topics import OUTPUT_CHANNELS
 from brake_hil.types import FloatArray
 
@@ -36,19 +38,8 @@ class Evidence:
     harmonics: dict[str, dict[str, list[float]]] = field(default_factory=dict)
 
 
-@dataclass(frozen=True)
-class SegmentSignals:
-    """Measured and baseline-predicted signals over one steady segment."""
-
-    window: Window
-    time: FloatArray
-    pressure: FloatArray
-    measured: dict[str, FloatArray]
-    predicted: dict[str, FloatArray]
-
-
 def segment_signals(model: Model, theta: FloatArray) -> list[SegmentSignals]:
-    """Simulate ``model`` over every steady segment of its dataset."""
+    """Simulate ``model`` over every segment's window of its dataset."""
     ds = model.dataset
     result = []
     for window in ds.segments:
@@ -97,11 +88,19 @@ def collect(
     found = _Findings(model.dataset, parts)
     channels, worst = found.overall()
     windows = found.per_segment(worst)
-    profile = found.phase(worst)
-    harmonics = found.harmonics()
-    found.amplitude_trend(k_eh_by_segment)
-    found.drift()
+    profile: dict[str, list[float]] = {}
+    harmonics: dict[str, dict[str, list[float]]] = {}
+    if found.steady:  # the cycle's phase, harmonics and drift need steady pulsing
+        profile = found.phase(worst)
+        harmonics = found.harmonics()
+        found.amplitude_trend(k_eh_by_segment)
+        found.drift()
     found.lags()
+    others = [p for p in parts if p.window.kind != "steady"]
+    if others:
+        values, findings = segment_evidence.collect(model.dataset, others)
+        found.values.update(values)
+        found.findings.extend(findings)
     return Evidence(found.values, found.findings, channels, windows, profile, harmonics)
 
 
@@ -111,6 +110,7 @@ class _Findings:
     def __init__(self, dataset: Dataset, parts: list[SegmentSignals]) -> None:
         self.ds = dataset
         self.parts = parts
+        self.steady = [p for p in parts if p.window.kind == "steady"]  # today's windows
         self.scale = dataset.scale()
         self.values: dict[str, float] = {}
         self.findings: list[str] = []
@@ -129,18 +129,20 @@ class _Findings:
             (k for k in OUTPUT_CHANNELS if nrmse[k] > MISMATCH_NRMSE), key=lambda k: -nrmse[k]
         )
         worst = max(nrmse, key=lambda k: nrmse[k])
+        over = "the steady cycles" if len(self.steady) == len(parts) else "its segments"
         self.findings.append(
-            "calibrated LTI baseline's RMS residual over the steady cycles, in % of the whole "
+            f"calibrated LTI baseline's RMS residual over {over}, in % of the whole "
             "recording's peak-to-peak (the fits' measure, not the seed's per-cycle NRMSE): "
             + ", ".join(f"{k} {100 * v:.2f} %" for k, v in nrmse.items())
             + (f"; mismatched: {', '.join(channels)}" if channels else "; no channel above 1 %")
         )
         noise = self.ds.noise_cost()
+        how = "cycle-to-cycle" if self.steady else "raw channels above 150 Hz"
         misfit = float(np.mean([v**2 for v in nrmse.values()]))
         values["noise_nrmse"] = float(np.sqrt(noise))
         values["misfit_over_noise"] = misfit / max(noise, 1e-18)
         self.findings.append(
-            f"measurement noise (cycle-to-cycle): {100 * np.sqrt(noise):.3f} % of peak-to-peak; "
+            f"measurement noise ({how}): {100 * np.sqrt(noise):.3f} % of peak-to-peak; "
             f"the baseline's squared error is {values['misfit_over_noise']:.1f} times the noise's"
         )
         return channels, worst
@@ -179,7 +181,7 @@ class _Findings:
         for key in OUTPUT_CHANNELS:
             bins = np.zeros(PHASE_BINS)
             counts = np.zeros(PHASE_BINS)
-            for part in self.parts:
+            for part in self.steady:
                 phase = _input_phase(part.time, part.pressure, self.ds.period)
                 index = np.minimum((phase / (2 * np.pi) * PHASE_BINS).astype(int), PHASE_BINS - 1)
                 r = (part.predicted[key] - part.measured[key]) / self.scale[key]
@@ -198,7 +200,7 @@ class _Findings:
 
     def harmonics(self) -> dict[str, dict[str, list[float]]]:
         """Harmonics (seed Table 1): growth from input to output, measured against predicted."""
-        parts, values = self.parts, self.values
+        parts, values = self.steady, self.values
         harmonics: dict[str, dict[str, list[float]]] = {"measured": {}, "predicted": {}}
         rate = 1.0 / self.ds.sample_time
 
@@ -245,9 +247,9 @@ class _Findings:
 
     def drift(self) -> None:
         """Drift over the recording: the per-cycle peak-to-peak ratio's trend in segments."""
-        ds, parts = self.ds, self.parts
+        ds, parts = self.ds, self.steady
         drift = 0.0
-        duration = ds.segments[-1].end - ds.segments[0].start
+        duration = parts[-1].window.end - parts[0].window.start
         for key in OUTPUT_CHANNELS:
             times, ratios = [], []
             for part in parts:

@@ -5,7 +5,8 @@ start-up transient has died away inside the window (the LTI model's slowest mode
 about 0.1 s; a slider settles within one cycle), or from longer before when a candidate's
 memory forgets its start more slowly (``Candidate.lead_in``: a seal seat that creeps over a
 second). Training windows are capped at ``FIT_SPAN`` seconds, which keeps a fit to a few
-seconds; held-out windows are scored whole.
+seconds; held-out windows are scored whole. Windows that do not repeat (a sweep, a ramp:
+``Window.capped`` false) enter a fit whole, from their ``lead_in``.
 """
 
 from __future__ import annotations
@@ -153,12 +154,14 @@ class Model:
     def _span(self, window: Window, span: float | None) -> tuple[int, int, BoolArray]:
         """First and end sample simulated for ``window``, and the mask of those inside it.
 
-        The simulation starts ``preroll`` seconds before the window and ends ``lookahead``
-        seconds after it (or at the recording's end).
+        The simulation starts ``preroll`` seconds before the window (its ``lead_in`` when
+        longer) and ends ``lookahead`` seconds after it (or at the recording's end). ``span``
+        caps only a ``capped`` window (steady pulsing: its cycles repeat).
         """
         ds = self.dataset
-        end = window.end if span is None else min(window.end, window.start + span)
-        first = int(np.searchsorted(ds.time, window.start - self.preroll))
+        capped = span is not None and window.capped
+        end = min(window.end, window.start + span) if capped and span else window.end
+        first = int(np.searchsorted(ds.time, window.start - max(self.preroll, window.lead_in)))
         last = int(np.searchsorted(ds.time, end + self.lookahead - 1e-9))
         time = ds.time[first:last]
         inside = (time >= window.start - 1e-9) & (time < end - 1e-9)
@@ -427,7 +430,7 @@ def _uncertainty(
     the count that sets the covariance is the independent one, about 60 per second and
     channel.
     """
-    span = sum(min(w.end - w.start, FIT_SPAN) for w in model.dataset.train)
+    span = sum(min(w.end - w.start, FIT_SPAN if w.capped else np.inf) for w in model.dataset.train)
     independent = max(INDEPENDENT_SAMPLES_PER_SECOND * span * len(OUTPUT_CHANNELS), 2.0)
     inflation = max(cost / MODEL_ERROR**2, 1e-6) * max(samples / independent, 1.0)
     try:

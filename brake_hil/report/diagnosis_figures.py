@@ -26,6 +26,7 @@ from brake_hil.diagnosis.diagnose import Diagnosis  # noqa: E402
 from brake_hil.diagnosis.evidence import PHASE_BINS  # noqa: E402
 from brake_hil.diagnosis.fitting import Model  # noqa: E402
 from brake_hil.report.embed import png_data_uri  # noqa: E402
+from brake_hil.report.segment_figures import segment_figures  # noqa: E402
 from brake_hil.topics import OUTPUT_CHANNELS  # noqa: E402
 
 __all__ = [
@@ -255,6 +256,7 @@ def figures(diagnosis: Diagnosis) -> Figures:
     errors = {
         label: loop_nrmse(loops[label], loops["measured"]) for label in ("baseline", "improved")
     }
+    steady = bool(diagnosis.evidence.phase_profile)  # phase and harmonics need cycles
     shown = (
         (
             _time_plot(diagnosis, data),
@@ -262,20 +264,34 @@ def figures(diagnosis: Diagnosis) -> Figures:
             "Measured, baseline (the calibrated LTI model) and improved model on cycles no "
             "fit saw; residuals below.",
         ),
-        (
-            _phase_plot(diagnosis),
-            "residual over the cycle",
-            "Where in the 5 Hz cycle the baseline misses (its RMS residual per phase bin).",
+        *(
+            (
+                (
+                    _phase_plot(diagnosis),
+                    "residual over the cycle",
+                    "Where in the 5 Hz cycle the baseline misses (its RMS residual per phase "
+                    "bin).",
+                ),
+                (
+                    _harmonics_plot(diagnosis),
+                    "harmonics",
+                    harmonics_caption(diagnosis.evidence.harmonics),
+                ),
+            )
+            if steady
+            else ()
         ),
-        (
-            _harmonics_plot(diagnosis),
-            "harmonics",
-            harmonics_caption(diagnosis.evidence.harmonics),
+        *(
+            (
+                (
+                    _loop_plot(loops),
+                    "seal hysteresis loop",
+                    loop_caption(errors["baseline"], errors["improved"]),
+                ),
+            )
+            if steady  # two held-out cycles; a ramp's loop is on its static map
+            else ()
         ),
-        (
-            _loop_plot(loops),
-            "seal hysteresis loop",
-            loop_caption(errors["baseline"], errors["improved"]),
-        ),
+        *segment_figures(diagnosis),
     )
     return Figures(shown, errors)

@@ -74,6 +74,11 @@ HELD_OUT_ERROR = (
     "pressures, so NRMSE reads larger), squared and averaged over the three channels; a "
     "hypothesis's \"error cut\" is the baseline's held-out error over its own."
 )
+OTHER_WINDOWS = (
+    "A held-out window that is not pulsing (a sweep's last band, a ramp's part) is taken "
+    "whole: peak-to-peak ratio, lag over the rig's period T and NRMSE over the window, "
+    "weighted by its length in periods T."
+)
 FLAG_SIGMA = 3.0
 """A calibration multiplier this many prior sigmas from 1 is a finding about the rig file."""
 IDENTIFIED_RELATIVE_SIGMA = 0.5
@@ -302,12 +307,16 @@ def _rig_checks(diagnosis: Diagnosis, findings: list[Finding]) -> list[str]:
 def _evidence(diagnosis: Diagnosis) -> str:
     """The evidence's lines; its residual and noise lines in plain words."""
     values = diagnosis.evidence.values
+    steady = diagnosis.dataset.steady  # else: over its windows, the noise above 150 Hz
+    over = "the steady cycles" if steady else "its windows"
+    noise = "cycle-to-cycle" if steady else "raw channels' (above 150 Hz)"
+    whole = "all the steady segments" if steady else "all its windows"
     items = []
     for line in diagnosis.evidence.findings:
         if line.startswith("measurement noise") and "misfit_over_noise" in values:
             line = (
                 f"{noise_words(values['misfit_over_noise'])}: the calibrated LTI model's RMS "
-                "error over the steady cycles, against the cycle-to-cycle sensor noise "
+                f"error over {over}, against the {noise} sensor noise "
                 f"({100 * values.get('noise_nrmse', math.nan):.3f} % of peak-to-peak)"
             )
         elif line.startswith("calibrated LTI baseline's RMS residual"):
@@ -315,8 +324,8 @@ def _evidence(diagnosis: Diagnosis) -> str:
             errors = ", ".join(f"{k} {values[f'nrmse_{k}']:.4f}" for k in shown)
             tail = line[line.index(";") :] if ";" in line else ""
             line = (
-                "calibrated LTI model's RMS residual over the steady cycles, as a fraction of "
-                "the peak-to-peak over all the steady segments (the held-out error's scale, "
+                f"calibrated LTI model's RMS residual over {over}, as a fraction of "
+                f"the peak-to-peak over {whole} (the held-out error's scale, "
                 f"not NRMSE's): {errors}{tail.replace('above 1 %', 'above 0.01')}"
             )
         items.append(f"<li>{_text(line)}</li>")
@@ -336,8 +345,9 @@ def _metrics_table(diagnosis: Diagnosis) -> str:
             f"<td>{b['tau_over_T_pct']:+.2f}</td><td>{i['tau_over_T_pct']:+.2f}</td>"
             f"<td>{_nrmse(b['nrmse'])}</td><td>{_nrmse(i['nrmse'])}</td></tr>"
         )
+    other = "" if diagnosis.dataset.steady else f"<p>{OTHER_WINDOWS}</p>"
     return (
-        f"<p>{NRMSE_DEFINITION}</p><p>{HELD_OUT_ERROR}</p>"
+        f"<p>{NRMSE_DEFINITION}</p><p>{HELD_OUT_ERROR}</p>{other}"
         "<table><tr><th>channel</th><th>ptp % baseline</th><th>ptp % improved</th>"
         "<th>tau/T % baseline</th><th>tau/T % improved</th><th>NRMSE baseline</th>"
         "<th>NRMSE improved</th></tr>" + "".join(rows) + "</table>"

@@ -93,6 +93,11 @@ def plot_time(comparison: RecordingComparison, path: Path, title: str) -> Path:
 
 def plot_bode(comparison: RecordingComparison, path: Path, title: str) -> Path:
     """Gain and phase to ``p_i`` against frequency of every sweep, measured and model."""
+    return _save(bode_figure(comparison, title), path)
+
+
+def bode_figure(comparison: RecordingComparison, title: str) -> Figure:
+    """:func:`plot_bode`'s figure, not saved (the diagnosis report embeds it)."""
     sweeps = [s for s in comparison.segments if s.segment.kind == "sweep" and s.metrics]
     figure, axes = plt.subplots(2, 3, figsize=(14, 8), sharex=True)
     for n, scored in enumerate(sweeps):
@@ -134,11 +139,16 @@ def plot_bode(comparison: RecordingComparison, path: Path, title: str) -> Path:
             if n == 0:
                 axes[0, col].legend(fontsize=8)
     figure.suptitle(f"{title}: frequency response over the sweep (Bode)", fontsize=12)
-    return _save(figure, path)
+    return figure
 
 
 def plot_static_map(comparison: RecordingComparison, path: Path, title: str) -> Path:
     """Each channel against ``p_i`` over every ramp, rise and fall, measured and model."""
+    return _save(static_map_figure(comparison, title), path)
+
+
+def static_map_figure(comparison: RecordingComparison, title: str) -> Figure:
+    """:func:`plot_static_map`'s figure, not saved (the diagnosis report embeds it)."""
     ramps = [s for s in comparison.segments if s.segment.kind == "ramp"]
     figure, axes = plt.subplots(1, 3, figsize=(15, 5.5))
     p_i = comparison.master_cylinder_pressure * 1e-6
@@ -167,7 +177,7 @@ def plot_static_map(comparison: RecordingComparison, path: Path, title: str) -> 
     for axis in axes:
         axis.legend(fontsize=7)
     figure.suptitle(f"{title}: static map and hysteresis over the ramps", fontsize=12)
-    return _save(figure, path)
+    return figure
 
 
 def plot_segments(comparison: RecordingComparison, path: Path, title: str) -> list[Path]:
