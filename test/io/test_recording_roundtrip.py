@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from pathlib import Path
 import shutil
-import time as wallclock
 
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
@@ -283,19 +282,15 @@ def test_stamped_cdr_matches_the_rosbags_serialiser(spec: TopicSpec, frame_id: s
     assert np.array_equal(decoded_values, values)
 
 
-def test_an_18_s_1_khz_recording_of_seven_topics_writes_and_reads_in_well_under_2_s(
+def test_an_18_s_1_khz_recording_of_seven_topics_writes_and_reads_whole(
     tmp_path: Path, long_run: Run
 ) -> None:
+    # its speed is benchmarks/bench_io.py's (against a copy of the same files)
     time, channels = long_run
-    started = wallclock.perf_counter()
     bag = write_recording(tmp_path / "long", time, channels)
-    written = wallclock.perf_counter()
     recording = read_recording(bag)
-    read = wallclock.perf_counter()
 
     assert recording.time.size == 18_000
-    assert read - written < 2.0, f"read took {read - written:.2f} s"
-    assert written - started < 3.0, f"write took {written - started:.2f} s"
 
 
 def test_an_optional_topic_without_messages_counts_as_absent(tmp_path: Path, run: Run) -> None:
