@@ -230,8 +230,11 @@ def decide(summary: Summary) -> Verdict:
     """
     verdict = decide_effects(summary)
     share = posterior(summary).of(verdict.effects)
+    ceiling = _confidence(STAND_IN_MARGIN)
+    if verdict.capped == CAME_CLOSE and share <= ceiling:
+        verdict = dataclasses.replace(verdict, capped=None)  # the posterior doubts it more
     if verdict.capped is not None:
-        share = min(share, _confidence(STAND_IN_MARGIN))
+        share = min(share, ceiling)
     return dataclasses.replace(verdict, confidence=share)
 
 

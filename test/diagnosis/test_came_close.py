@@ -7,7 +7,9 @@ leave a slow misfit of ``p_b`` beside the seal's (stick-slip cuts the held-out e
 times and passes every rule, a free resonance form 2.9 times); and case 008, a 0.76 ms
 delay of ``p_b`` under the same drift, which no library effect cuts the required ratio (the
 delay 1.30 times). Without the chain's drift the seal is named (cut 7.0 times) and so is
-the delay (6.3 times): docs/benchmarks.md.
+the delay (6.3 times): docs/benchmarks.md. And a null of ``--seed 8233 --family c`` (case
+000), ``unexplained`` beside a library effect that passed every rule but the forms' bar,
+whose posterior gives ``unexplained`` almost nothing (none takes 0.89).
 """
 
 from __future__ import annotations
@@ -49,3 +51,13 @@ def test_the_cap_is_a_pure_function_of_the_stored_inputs() -> None:
     again = Summary.from_dict(json.loads(json.dumps(summary.as_dict())))
     assert decide(again) == decide(summary)
     assert decide_effects(again).capped == CAME_CLOSE
+
+
+def test_a_close_effect_says_nothing_where_the_posterior_doubts_more() -> None:
+    """The words would read "likely" on a verdict of share 0.00: the number is said."""
+    summary = stored("familyc_null_close")
+    assert decide_effects(summary).capped == CAME_CLOSE
+    verdict = decide(summary)
+    assert verdict.effects == ("unexplained",)
+    assert verdict.capped is None
+    assert verdict.confidence < 0.1
