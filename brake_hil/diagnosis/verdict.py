@@ -35,6 +35,7 @@ from brake_hil.diagnosis.thresholds import (
 )
 
 __all__ = [
+    "CAME_CLOSE",
     "NOT_ALONE",
     "SET_ASIDE",
     "Verdict",
@@ -56,6 +57,8 @@ NOT_ALONE = "not sure it is alone"
 """The words of a confidence capped because the single named may not be alone."""
 SET_ASIDE = "a better fit failed a physics check"
 """The words of a confidence capped because a better-scoring hypothesis was set aside."""
+CAME_CLOSE = "a library effect came close: it passed every rule but the generic forms' bar"
+"""The words of an ``unexplained`` capped because a library effect missed only that bar."""
 
 
 @dataclass(frozen=True)
@@ -227,8 +230,11 @@ def decide(summary: Summary) -> Verdict:
     """
     verdict = decide_effects(summary)
     share = posterior(summary).of(verdict.effects)
+    ceiling = _confidence(STAND_IN_MARGIN)
+    if verdict.capped == CAME_CLOSE and share <= ceiling:
+        verdict = dataclasses.replace(verdict, capped=None)  # the posterior doubts it more
     if verdict.capped is not None:
-        share = min(share, _confidence(STAND_IN_MARGIN))
+        share = min(share, ceiling)
     return dataclasses.replace(verdict, confidence=share)
 
 
@@ -462,7 +468,8 @@ def _not_named(summary: Summary, standing: _Standing, cap: _Caps) -> Verdict:
 
     Unexplained (rather than none) when the misfit is large, or structured: a generic form
     cuts it ``STRUCTURED_RATIO`` times, or a library effect cuts it the required ratio but no
-    better than a generic form. Each test's log distance from its threshold.
+    better than a generic form. Each test's log distance from its threshold. An
+    ``unexplained`` beside such an effect is capped in words (``CAME_CLOSE``).
     """
     log_gains, passing, required = standing.log_gains, standing.passing, standing.required
     # the fall-through's nearest miss of the required ratio (the passing ones missed the form
@@ -477,6 +484,12 @@ def _not_named(summary: Summary, standing: _Standing, cap: _Caps) -> Verdict:
     margin, capped = cap.apply(
         [math.log(required) - best, max(beyond) if unexplained else -max(beyond)]
     )
+    if passing and capped is None:
+        # A library effect cleared every rule but the generic forms' bar: the recording
+        # holds its signature, and a free form may do better only by also taking a part no
+        # library effect makes (a reading's drifting zero beside a seal's stick-slip). That
+        # the effect is absent is then no surer than a stand-in's replacement.
+        capped = CAME_CLOSE
     effects = ("unexplained",) if unexplained else ()
     return Verdict(effects, _confidence(margin), None, margin, capped)
 
