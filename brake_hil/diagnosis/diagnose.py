@@ -33,6 +33,11 @@ from brake_hil.diagnosis.candidates import CANDIDATES, candidate
 from brake_hil.diagnosis.dataset import Dataset, prepare
 from brake_hil.diagnosis.evidence import Evidence, collect
 from brake_hil.diagnosis.fitting import Fit, Model, fit
+from brake_hil.diagnosis.geometry_share import (
+    fold_geometry,
+    geometry_stand_ins,
+    recorded_pressures,
+)
 from brake_hil.diagnosis.groove import groove_asymmetry, symmetric_seals
 from brake_hil.diagnosis.physics_checks import CheckOutcome, check_hypothesis
 from brake_hil.diagnosis.residual_forms import (
@@ -63,6 +68,7 @@ from brake_hil.diagnosis.thresholds import (
     WEAK_SINGLE_RATIO,
     WINDOW_FLOOR,
 )
+from brake_hil.diagnosis.tolerance_prior import share_band
 from brake_hil.diagnosis.verdict import (
     Verdict,
     _confidence,
@@ -267,16 +273,21 @@ def _decide_with_pairs(
         p for p in unnameable_pairs(fits.baseline, fits.singles) if not _nested(*p)
     )
     pairs = fits.pairs(ruled_out)
-    summary = summarise(
-        fits.baseline, fits.singles, pairs, noise_cost, evidence, ruled_out, form_gains
-    )
+    band = share_band(fits.calibration.rig)
+    pressures = recorded_pressures(fits.dataset)
+
+    def summary_of(pairs: list[Fit]) -> Summary:
+        raw = summarise(
+            fits.baseline, fits.singles, pairs, noise_cost, evidence, ruled_out, form_gains
+        )  # an eccentric share the geometry makes is folded beside its host (geometry_share)
+        return fold_geometry(raw, geometry_stand_ins([*fits.singles, *pairs], band, pressures))
+
+    summary = summary_of(pairs)
     verdict = decide(summary)
     if unfitted_pairs_matter(summary, verdict):
         fits.say("fitting the pairs left out, as rivals or partners of the verdict")
         pairs = fits.pairs()
-        summary = summarise(
-            fits.baseline, fits.singles, pairs, noise_cost, evidence, ruled_out, form_gains
-        )
+        summary = summary_of(pairs)
         verdict = decide(summary)
     return summary, verdict, pairs
 
