@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import replace
+import json
 
 import numpy as np
 import pytest
@@ -16,6 +17,7 @@ from brake_hil.physics.rig import load_rig
 from test.conftest import PROJECT
 
 RIG_FILE = PROJECT / "config" / "rig_default.yaml"
+DATA = PROJECT / "test" / "diagnosis" / "data"
 BASE = 1.0e-5  # held-out cost of the baseline
 PRESSURES = (0.1e6, 2.8e6)  # Pa, the recorded bore pressures
 ECC = "eccentric_load"
@@ -95,3 +97,18 @@ def test_a_geometry_share_beside_a_real_effect_is_folded_into_it() -> None:
     assert seal.held_out_cost == pytest.approx(BASE / 80) and seal.parameters == 3
     # an eccentric share beyond the geometry's stays a second effect
     assert set(decide(fold_geometry(raw, {})).effects) == {SEAL, ECC}
+
+
+def test_a_stored_null_named_eccentric_load_is_none_with_the_geometry_folded() -> None:
+    stored = json.loads((DATA / "null_geometry_share.json").read_text(encoding="utf-8"))
+    raw = Summary.from_dict(stored["decision_inputs"])
+    assert decide(raw).effects == (ECC,)  # the calibrated rig file alone: named at 0.95
+    pressures = (stored["pressures"][0], stored["pressures"][1])
+    stand_ins = {
+        key: why
+        for key, theta in stored["eccentric_fits"].items()
+        if (why := geometry_share(np.array(theta), stored["band"], pressures)) is not None
+    }
+    assert ECC in stand_ins and "0.92" in stand_ins[ECC]
+    verdict = decide(fold_geometry(raw, stand_ins))
+    assert verdict.effects == () and verdict.confidence > 0.9
