@@ -34,6 +34,7 @@ from brake_hil.diagnosis.dataset import Dataset, prepare
 from brake_hil.diagnosis.evidence import Evidence, collect
 from brake_hil.diagnosis.fitting import Fit, Model, fit
 from brake_hil.diagnosis.geometry_share import (
+    checked_fit,
     fold_geometry,
     geometry_stand_ins,
     recorded_pressures,
@@ -302,10 +303,11 @@ def _check_physics(
     checks: dict[str, list[CheckOutcome]] = {}
     rounds = 0
     while rounds < CHECK_ROUNDS:
-        named = next((h for h in hypotheses if h.effects == verdict.chosen), None)
-        if named is None or "+".join(named.effects) in checks:
+        chosen = verdict.chosen or ()
+        named = checked_fit(hypotheses, chosen, summary)  # with a folded geometry share
+        if named is None or "+".join(chosen) in checks:
             break
-        key = "+".join(named.effects)
+        key = "+".join(chosen)
         fits.say(f"checking the physics of {key}")
         checks[key] = check_hypothesis(
             fits.calibration,
@@ -321,7 +323,7 @@ def _check_physics(
         # the groove's asymmetry is read off its fit, and a law that holds one set aside
         # already (the groove holds stick-slip) is that hypothesis checked again: no round
         failed_before = [k.split("+") for k in checks if k != key]
-        again = any(_holds_all(named.effects, tuple(k)) for k in failed_before)
+        again = any(_holds_all(chosen, tuple(k)) for k in failed_before)
         rounds += failed.name != "asymmetry" and not again
         summary = replace(summary, stand_ins={**summary.stand_ins, key: failed.finding})
         verdict = decide(summary)

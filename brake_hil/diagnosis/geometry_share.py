@@ -24,7 +24,7 @@ from brake_hil.diagnosis.dataset import Dataset
 from brake_hil.diagnosis.fitting import Fit
 from brake_hil.diagnosis.summary import Hypothesis, Summary
 
-__all__ = ["ECCENTRIC", "fold_geometry", "geometry_stand_ins", "recorded_pressures"]
+__all__ = ["ECCENTRIC", "checked_fit", "fold_geometry", "geometry_stand_ins", "recorded_pressures"]
 
 ECCENTRIC = "eccentric_load"
 PRESSURE_PERCENTILES = (1.0, 99.0)
@@ -107,3 +107,22 @@ def fold_geometry(summary: Summary, stand_ins: dict[str, str]) -> Summary:
         form_gains={k: v * scale for k, v in summary.form_gains.items()},
         geometry=dict(stand_ins),
     )
+
+
+def checked_fit(fits: Iterable[Fit], chosen: tuple[str, ...], summary: Summary) -> Fit | None:
+    """The fit whose numbers the decision gave ``chosen``: its own, or a folded stand-in's.
+
+    When ``chosen``'s held-out numbers are those of ``chosen`` beside a geometry stand-in
+    (:func:`fold_geometry`), its physics is checked on that fit, with the geometry's share:
+    the checks judge the hypothesis the decision named, not one without the geometry.
+    """
+    candidates = list(fits)
+    own = next((f for f in candidates if f.effects == chosen), None)
+    for key in summary.geometry:
+        effects = tuple(key.split("+"))
+        if tuple(e for e in effects if e != ECCENTRIC) != chosen or not chosen:
+            continue
+        folded = next((f for f in candidates if f.effects == effects), None)
+        if folded is not None and (own is None or folded.held_out_cost < own.held_out_cost):
+            return folded
+    return own
