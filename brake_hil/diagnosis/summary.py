@@ -48,6 +48,7 @@ class Summary:
     not_alone: dict[str, str] = field(default_factory=dict)  # single: Candidate.not_alone
     form_gain: float = 1.0  # the best generic form's held-out improvement (residual_forms)
     form_gains: dict[str, float] = field(default_factory=dict)  # "form channel": improvement
+    geometry: dict[str, str] = field(default_factory=dict)  # "a+b": eccentric share in tolerance
 
     def form_bar(self, effects: tuple[str, ...]) -> float:
         """The best generic form's improvement that counts against ``effects``.
@@ -196,6 +197,7 @@ class Summary:
             not_alone=dict(document.get("not_alone", {})),
             form_gain=float(document.get("form_gain", 1.0)),
             form_gains={str(k): float(v) for k, v in document.get("form_gains", {}).items()},
+            geometry={str(k): str(v) for k, v in document.get("geometry", {}).items()},
         )
 
 
