@@ -31,7 +31,7 @@ from brake_hil.analysis.recording import Recording
 from brake_hil.diagnosis.calibration import Calibration, calibrate
 from brake_hil.diagnosis.candidates import CANDIDATES, candidate
 from brake_hil.diagnosis.dataset import Dataset, prepare
-from brake_hil.diagnosis.evidence import Evidence, collect
+from brake_hil.diagnosis.evidence import Evidence, collect, even_harmonics_left
 from brake_hil.diagnosis.fitting import Fit, Model, fit
 from brake_hil.diagnosis.groove import groove_asymmetry, symmetric_seals
 from brake_hil.diagnosis.physics_checks import CheckOutcome, check_hypothesis
@@ -239,6 +239,25 @@ class _Fits:
         """The fit of ``model`` as a one-item list, or none (:func:`_try_fit`)."""
         return _try_fit(model, start, self.unfitted, self.say)
 
+    def even_left(self) -> dict[str, tuple[float, float]]:
+        """The even harmonics of ``p_b`` each single whose law cannot make them leaves.
+
+        Share (%) and z (:func:`.evidence.even_harmonics_left`), for
+        :func:`.summary.unmade_signature`; a single whose run is not finite is left out.
+        """
+        left = {}
+        for h in self.singles:
+            name = h.effects[0]
+            if candidate(name).even_harmonics:
+                continue
+            try:
+                left[name] = even_harmonics_left(
+                    Model(self.calibration, [candidate(name)], self.dataset), h.theta
+                )
+            except (FitError, FloatingPointError):
+                continue
+        return left
+
     def pairs(self, ruled_out: frozenset[tuple[str, ...]] = frozenset()) -> list[Fit]:
         """The pairs of the best single with the next ones (:func:`fit_pairs`)."""
         return fit_pairs(
@@ -267,15 +286,16 @@ def _decide_with_pairs(
         p for p in unnameable_pairs(fits.baseline, fits.singles) if not _nested(*p)
     )
     pairs = fits.pairs(ruled_out)
+    left = fits.even_left()
     summary = summarise(
-        fits.baseline, fits.singles, pairs, noise_cost, evidence, ruled_out, form_gains
+        fits.baseline, fits.singles, pairs, noise_cost, evidence, ruled_out, form_gains, left
     )
     verdict = decide(summary)
     if unfitted_pairs_matter(summary, verdict):
         fits.say("fitting the pairs left out, as rivals or partners of the verdict")
         pairs = fits.pairs()
         summary = summarise(
-            fits.baseline, fits.singles, pairs, noise_cost, evidence, ruled_out, form_gains
+            fits.baseline, fits.singles, pairs, noise_cost, evidence, ruled_out, form_gains, left
         )
         verdict = decide(summary)
     return summary, verdict, pairs
