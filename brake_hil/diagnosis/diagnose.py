@@ -239,10 +239,10 @@ class _Fits:
         """The fit of ``model`` as a one-item list, or none (:func:`_try_fit`)."""
         return _try_fit(model, start, self.unfitted, self.say)
 
-    def even_left(self) -> dict[str, tuple[float, float]]:
+    def even_left(self) -> dict[str, tuple[float, float, float]]:
         """The even harmonics of ``p_b`` each single whose law cannot make them leaves.
 
-        Share (%) and z (:func:`.evidence.even_harmonics_left`), for
+        Share (%), z and power (:func:`.evidence.even_harmonics_left`), for
         :func:`.summary.unmade_signature`; a single whose run is not finite is left out.
         """
         left = {}

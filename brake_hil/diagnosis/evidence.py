@@ -16,7 +16,6 @@ import numpy as np
 from brake_hil.analysis import signals
 from brake_hil.diagnosis.dataset import Dataset, Window
 from brake_hil.diagnosis.fitting import Model
-from brake_hil.diagnosis.thresholds import SIGNIFICANT_Z
 from brake_hil.topics import OUTPUT_CHANNELS
 from brake_hil.types import FloatArray
 
@@ -226,8 +225,11 @@ class _Findings:
             values[f"even_harmonics_{key}"] = float(
                 (measured[1] + measured[3]) - (predicted[1] + predicted[3])
             )
-        _, z = even_harmonics_z(self.parts, "p_b", rate, 1.0 / self.ds.period)
+        _, z, power = even_harmonics_z(
+            self.parts, "p_b", rate, 1.0 / self.ds.period, self.scale["p_b"]
+        )
         values["even_harmonics_z_p_b"] = z
+        values["even_harmonics_power_p_b"] = power
         self.findings.append(
             f"p_b's even harmonics (10 and 20 Hz) beyond the model's: "
             f"{values['even_harmonics_p_b']:+.4f} % of its energy, {z:+.1f} standard errors of "
@@ -353,44 +355,53 @@ def _even_share(signal: FloatArray, rate: float, fundamental: float) -> float | 
     return float(100.0 * (shares[1] + shares[3]) / total)
 
 
-def even_harmonics_left(model: Model, theta: FloatArray) -> tuple[float, float]:
-    """The even harmonics of ``p_b`` that ``model`` at ``theta`` leaves (:func:`even_harmonics_z`)."""
+def even_harmonics_left(model: Model, theta: FloatArray) -> tuple[float, float, float]:
+    """The even harmonics of ``p_b`` ``model`` leaves at ``theta`` (:func:`even_harmonics_z`)."""
     ds = model.dataset
     return even_harmonics_z(
-        segment_signals(model, theta), "p_b", 1.0 / ds.sample_time, 1.0 / ds.period
+        segment_signals(model, theta),
+        "p_b",
+        1.0 / ds.sample_time,
+        1.0 / ds.period,
+        ds.scale()["p_b"],
     )
 
 
 def even_harmonics_z(
-    parts: list[SegmentSignals], key: str, rate: float, fundamental: float
-) -> tuple[float, float]:
-    """Even harmonics of ``key`` the model does not make: their share (%) and its z.
+    parts: list[SegmentSignals], key: str, rate: float, fundamental: float, scale: float = 1.0
+) -> tuple[float, float, float]:
+    """Even harmonics of ``key`` the model does not make: their share (%), its z, their power.
 
     Each steady segment is cut into ``EVEN_CHUNKS`` pieces of whole cycles; on each, the
-    measured share of energy at the 2nd and 4th harmonics less the predicted one. The mean
-    over every piece, over its standard error: the scatter of the pieces about their own
-    segment's mean (what the noise and the cycle-to-cycle changes make). A law that is the
-    same on apply and release (an LTI model, stick-slip, Coulomb friction) adds no even
-    harmonics to a symmetric cycle; one that changes with pressure (air's compliance, a load
-    share) does. The share is the pieces' mean; z is 0 when the scatter cannot be measured
-    (too few pieces).
+    measured share of energy at the 2nd and 4th harmonics less the predicted one. The share
+    is the mean over every piece; z, that mean over its standard error: the scatter of the
+    pieces about their own segment's mean (what the noise and the cycle-to-cycle changes
+    make; 0 when it cannot be measured, too few pieces). The power is the share times the
+    measured mean square, over ``scale`` squared: on the held-out costs' scale when
+    ``scale`` is the channel's peak-to-peak (``Dataset.scale``). A law the same on apply and
+    release (an LTI model, stick-slip, an orifice) adds no even harmonics to a symmetric
+    cycle; one that changes with the pressure (air's compliance, a load share) does.
     """
     excess: list[list[float]] = []
+    powers: list[float] = []
     for part in parts:
         size = part.time.size // EVEN_CHUNKS
         pieces = []
         for i in range(EVEN_CHUNKS):
-            piece = slice(i * size, (i + 1) * size)
-            measured = _even_share(part.measured[key][piece], rate, fundamental)
-            predicted = _even_share(part.predicted[key][piece], rate, fundamental)
+            piece = part.measured[key][i * size : (i + 1) * size]
+            measured = _even_share(piece, rate, fundamental)
+            predicted = _even_share(
+                part.predicted[key][i * size : (i + 1) * size], rate, fundamental
+            )
             if measured is not None and predicted is not None:
                 pieces.append(measured - predicted)
+                powers.append((measured - predicted) / 100.0 * float(np.var(piece)) / scale**2)
         if len(pieces) > 1:
             excess.append(pieces)
     count = sum(len(p) for p in excess)
     freedom = count - len(excess)
     if freedom < 1:
-        return 0.0, 0.0
+        return 0.0, 0.0, 0.0
     scatter = sum(float(np.sum((np.array(p) - np.mean(p)) ** 2)) for p in excess) / freedom
     mean = float(np.mean([v for p in excess for v in p]))
-    return mean, mean / max(float(np.sqrt(scatter / count)), 1e-12)
+    return mean, mean / max(float(np.sqrt(scatter / count)), 1e-12), float(np.mean(powers))

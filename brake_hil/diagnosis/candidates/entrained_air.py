@@ -11,8 +11,8 @@ from brake_hil.diagnosis.candidates.base import (
     Draft,
 )
 from brake_hil.diagnosis.candidates.registry import register_candidate_class
-from brake_hil.diagnosis.thresholds import SIGNIFICANT_Z
 from brake_hil.diagnosis.engine import Coupling, Entry, Term
+from brake_hil.diagnosis.thresholds import NOISE_EXCESS, SIGNIFICANT_Z
 from brake_hil.physics.catalogue import CATALOGUE
 from brake_hil.types import FloatArray
 
@@ -58,7 +58,12 @@ class EntrainedAir(Candidate):
 
         Air's compliance falls with the pressure, so the bore is softer on the cycle's low
         half than on its high half: even harmonics of ``p_b``, judged against their own
-        scatter over the cycles (``evidence.even_harmonics_z``), not against a fixed share of
-        the peak-to-peak (a little air mispredicts ``p_b`` by well under 1 %).
+        scatter over the cycles and the noise (``evidence.even_harmonics_z``, the bars of
+        :func:`.summary.unmade_signature`), not against a fixed share of the peak-to-peak (a
+        little air mispredicts ``p_b`` by well under 1 %).
         """
-        return evidence.get("even_harmonics_z_p_b", 0.0) > SIGNIFICANT_Z
+        noise = evidence.get("noise_nrmse", 0.0) ** 2
+        return (
+            evidence.get("even_harmonics_z_p_b", 0.0) > SIGNIFICANT_Z
+            and evidence.get("even_harmonics_power_p_b", 0.0) > NOISE_EXCESS * noise
+        )
