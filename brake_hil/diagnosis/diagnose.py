@@ -32,7 +32,7 @@ from brake_hil.diagnosis import segment_evidence
 from brake_hil.diagnosis.calibration import Calibration, calibrate
 from brake_hil.diagnosis.candidates import CANDIDATES, candidate
 from brake_hil.diagnosis.dataset import Dataset, prepare
-from brake_hil.diagnosis.evidence import Evidence, collect
+from brake_hil.diagnosis.evidence import Evidence, collect, even_harmonics_left
 from brake_hil.diagnosis.fitting import Fit, Model, fit
 from brake_hil.diagnosis.geometry_share import (
     checked_fit,
@@ -291,6 +291,25 @@ class _Fits:
         """The fit of ``model`` as a one-item list, or none (:func:`_try_fit`)."""
         return _try_fit(model, start, self.unfitted, self.say)
 
+    def even_left(self) -> dict[str, tuple[float, float, float]]:
+        """The even harmonics of ``p_b`` each single whose law cannot make them leaves.
+
+        Share (%), z and power (:func:`.evidence.even_harmonics_left`), for
+        :func:`.summary.unmade_signature`; a single whose run is not finite is left out.
+        """
+        left = {}
+        for h in self.singles:
+            name = h.effects[0]
+            if candidate(name).even_harmonics:
+                continue
+            try:
+                left[name] = even_harmonics_left(
+                    Model(self.calibration, [candidate(name)], self.dataset), h.theta
+                )
+            except (FitError, FloatingPointError):
+                continue
+        return left
+
     def pairs(self, ruled_out: frozenset[tuple[str, ...]] = frozenset()) -> list[Fit]:
         """The pairs of the best single with the next ones (:func:`fit_pairs`)."""
         return fit_pairs(
@@ -321,10 +340,11 @@ def _decide_with_pairs(
     pairs = fits.pairs(ruled_out)
     band = share_band(fits.calibration.rig)
     pressures = recorded_pressures(fits.dataset)
+    left = fits.even_left()
 
     def summary_of(pairs: list[Fit]) -> Summary:
         raw = summarise(
-            fits.baseline, fits.singles, pairs, noise_cost, evidence, ruled_out, form_gains
+            fits.baseline, fits.singles, pairs, noise_cost, evidence, ruled_out, form_gains, left
         )  # an eccentric share the geometry makes is folded beside its host (geometry_share)
         return fold_geometry(raw, geometry_stand_ins([*fits.singles, *pairs], band, pressures))
 

@@ -24,6 +24,8 @@ from brake_hil.types import FloatArray
 MISMATCH_NRMSE = 0.01
 """A channel whose baseline NRMSE exceeds this (1 % of its peak-to-peak) is mismatched."""
 PHASE_BINS = 24
+EVEN_CHUNKS = 8
+"""Pieces each steady segment is cut into to measure the scatter of its even harmonics."""
 
 
 @dataclass(frozen=True)
@@ -225,6 +227,17 @@ class _Findings:
             values[f"even_harmonics_{key}"] = float(
                 (measured[1] + measured[3]) - (predicted[1] + predicted[3])
             )
+        _, z, power = even_harmonics_z(
+            self.parts, "p_b", rate, 1.0 / self.ds.period, self.scale["p_b"]
+        )
+        values["even_harmonics_z_p_b"] = z
+        values["even_harmonics_power_p_b"] = power
+        self.findings.append(
+            f"p_b's even harmonics (10 and 20 Hz) beyond the model's: "
+            f"{values['even_harmonics_p_b']:+.4f} % of its energy, {z:+.1f} standard errors of "
+            "their scatter over the cycles (a compliance that changes with pressure, as air's, "
+            "makes them; a law the same on apply and release does not)"
+        )
         self.findings.append(
             "super-harmonic energy (10-25 Hz) beyond the model's: "
             + ", ".join(f"{k} {values[f'harmonic_growth_{k}']:+.2f} %" for k in OUTPUT_CHANNELS)
@@ -311,3 +324,86 @@ def _within_segment_slope(
     t = np.concatenate(centred_t)
     r = np.concatenate(centred_r)
     return float(np.dot(t, r) / max(float(np.dot(t, t)), 1e-12))
+
+
+def _even_share(signal: FloatArray, rate: float, fundamental: float) -> float | None:
+    """Share (%) of the 2nd and 4th harmonics in the first five, less the noise's part.
+
+    As :func:`.signals.harmonic_energy_shares` (whole cycles, each harmonic's bin and its two
+    neighbours), but the noise's energy per bin, the mean of the bins between the harmonics,
+    is taken off every harmonic's: noise adds energy to every bin, so without it a noisy
+    measurement shows even harmonics a noise-free prediction lacks. None: under two cycles.
+    """
+    cycles = int(signal.size * fundamental / rate)
+    length = int(round(cycles * rate / fundamental))
+    if cycles < 2 or length > signal.size or 5 * cycles + 1 >= length // 2:
+        return None
+    x = signal[:length] - float(np.mean(signal[:length]))
+    energy = np.abs(np.fft.rfft(x)) ** 2
+    near = np.zeros(energy.size, dtype=bool)
+    bins = []
+    for k in range(1, 6):
+        band = np.arange(k * cycles - 1, k * cycles + 2)
+        near[band] = True
+        bins.append(float(np.sum(energy[band])))
+    between = ~near
+    between[:cycles] = False
+    between[5 * cycles + 2 :] = False
+    noise = float(np.mean(energy[between])) if between.any() else 0.0
+    shares = np.array(bins) - 3.0 * noise
+    total = float(np.sum(shares))
+    if total <= 0.0:
+        return None
+    return float(100.0 * (shares[1] + shares[3]) / total)
+
+
+def even_harmonics_left(model: Model, theta: FloatArray) -> tuple[float, float, float]:
+    """The even harmonics of ``p_b`` ``model`` leaves at ``theta`` (:func:`even_harmonics_z`)."""
+    ds = model.dataset
+    return even_harmonics_z(
+        segment_signals(model, theta),
+        "p_b",
+        1.0 / ds.sample_time,
+        1.0 / ds.period,
+        ds.scale()["p_b"],
+    )
+
+
+def even_harmonics_z(
+    parts: list[SegmentSignals], key: str, rate: float, fundamental: float, scale: float = 1.0
+) -> tuple[float, float, float]:
+    """Even harmonics of ``key`` the model does not make: their share (%), its z, their power.
+
+    Each steady segment is cut into ``EVEN_CHUNKS`` pieces of whole cycles; on each, the
+    measured share of energy at the 2nd and 4th harmonics less the predicted one. The share
+    is the mean over every piece; z, that mean over its standard error: the scatter of the
+    pieces about their own segment's mean (what the noise and the cycle-to-cycle changes
+    make; 0 when it cannot be measured, too few pieces). The power is the share times the
+    measured mean square, over ``scale`` squared: on the held-out costs' scale when
+    ``scale`` is the channel's peak-to-peak (``Dataset.scale``). A law the same on apply and
+    release (an LTI model, stick-slip, an orifice) adds no even harmonics to a symmetric
+    cycle; one that changes with the pressure (air's compliance, a load share) does.
+    """
+    excess: list[list[float]] = []
+    powers: list[float] = []
+    for part in parts:
+        size = part.time.size // EVEN_CHUNKS
+        pieces = []
+        for i in range(EVEN_CHUNKS):
+            piece = part.measured[key][i * size : (i + 1) * size]
+            measured = _even_share(piece, rate, fundamental)
+            predicted = _even_share(
+                part.predicted[key][i * size : (i + 1) * size], rate, fundamental
+            )
+            if measured is not None and predicted is not None:
+                pieces.append(measured - predicted)
+                powers.append((measured - predicted) / 100.0 * float(np.var(piece)) / scale**2)
+        if len(pieces) > 1:
+            excess.append(pieces)
+    count = sum(len(p) for p in excess)
+    freedom = count - len(excess)
+    if freedom < 1:
+        return 0.0, 0.0, 0.0
+    scatter = sum(float(np.sum((np.array(p) - np.mean(p)) ** 2)) for p in excess) / freedom
+    mean = float(np.mean([v for p in excess for v in p]))
+    return mean, mean / max(float(np.sqrt(scatter / count)), 1e-12), float(np.mean(powers))

@@ -10,13 +10,21 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
-from brake_hil.diagnosis.candidates import candidate, own_columns
+from brake_hil.diagnosis.candidates import CANDIDATES, candidate, own_columns
 from brake_hil.diagnosis.evidence import Evidence
 from brake_hil.diagnosis.fitting import Fit
 from brake_hil.diagnosis.likelihood import log_evidence, log_prior
-from brake_hil.diagnosis.thresholds import NOISE_EXCESS, PAIR_SHARE
+from brake_hil.diagnosis.thresholds import NOISE_EXCESS, PAIR_SHARE, SIGNIFICANT_Z
 
-__all__ = ["Hypothesis", "Summary", "not_alone", "plausible", "ratio", "summarise"]
+__all__ = [
+    "Hypothesis",
+    "Summary",
+    "not_alone",
+    "plausible",
+    "ratio",
+    "summarise",
+    "unmade_signature",
+]
 
 
 @dataclass(frozen=True)
@@ -46,6 +54,8 @@ class Summary:
     pairs_ruled_out: tuple[tuple[str, ...], ...] = ()  # can never be named (unnameable_pairs)
     stand_ins: dict[str, str] = field(default_factory=dict)  # "a+b": the physics check failed
     not_alone: dict[str, str] = field(default_factory=dict)  # single: Candidate.not_alone
+    # single: the even harmonics of p_b its fit leaves, share (%), z, power (unmade_signature)
+    even_left: dict[str, tuple[float, float, float]] = field(default_factory=dict)
     form_gain: float = 1.0  # the best generic form's held-out improvement (residual_forms)
     form_gains: dict[str, float] = field(default_factory=dict)  # "form channel": improvement
     geometry: dict[str, str] = field(default_factory=dict)  # "a+b": eccentric share in tolerance
@@ -64,15 +74,20 @@ class Summary:
     def doubt(self, effects: tuple[str, ...]) -> str | None:
         """Why ``effects``, a single, may not be alone; else None.
 
-        Its own fitted values show another physics beside it (:attr:`not_alone`), or a
-        pair with it has the larger posterior while it leaves more than ``NOISE_EXCESS``
-        times the noise's share (:meth:`hidden_partner`).
+        Its own fitted values show another physics beside it (:attr:`not_alone`), a pair
+        with it has the larger posterior while it leaves more than ``NOISE_EXCESS`` times the
+        noise's share (:meth:`hidden_partner`), or the evidence shows a signature its law
+        cannot make (:meth:`unmade`). A second effect the pair identifies is said before the
+        signature's doubt, which names none.
         """
         if len(effects) != 1:
             return None
         if effects[0] in self.not_alone:
             return self.not_alone[effects[0]]
         partner = self.hidden_partner(effects[0])
+        unmade = self.unmade(effects[0])
+        if unmade is not None and (partner is None or partner[0] is None):
+            return unmade
         if partner is None:
             return None
         other, cut = partner
@@ -88,6 +103,11 @@ class Summary:
             f"to be named ({100 * PAIR_SHARE:g} % is asked), or a part of {effects[0]}'s "
             "physics its model does not follow"
         )
+
+    def unmade(self, name: str) -> str | None:
+        """Why single ``name`` is likely not alone by even harmonics it leaves (or None)."""
+        left = self.even_left.get(name)
+        return None if left is None else unmade_signature(name, left, self.noise_cost)
 
     def leaves_beyond_noise(self, name: str) -> bool:
         """Single ``name`` leaves more than ``NOISE_EXCESS`` times the noise's share."""
@@ -195,6 +215,10 @@ class Summary:
             pairs_ruled_out=tuple(tuple(p) for p in document.get("pairs_ruled_out", ())),
             stand_ins=dict(document.get("stand_ins", {})),
             not_alone=dict(document.get("not_alone", {})),
+            even_left={
+                str(k): (float(v[0]), float(v[1]), float(v[2]))
+                for k, v in document.get("even_left", {}).items()
+            },
             form_gain=float(document.get("form_gain", 1.0)),
             form_gains={str(k): float(v) for k, v in document.get("form_gains", {}).items()},
             geometry={str(k): str(v) for k, v in document.get("geometry", {}).items()},
@@ -209,11 +233,14 @@ def summarise(
     evidence: Evidence,
     pairs_ruled_out: frozenset[tuple[str, ...]] = frozenset(),
     form_gains: dict[str, float] | None = None,
+    even_left: dict[str, tuple[float, float, float]] | None = None,
 ) -> Summary:
     """The decision's inputs from the fits.
 
-    Also the pairs left unfitted as unnameable, and the best generic form's held-out
-    improvement (:mod:`.residual_forms`).
+    Also the pairs left unfitted as unnameable, the best generic form's held-out
+    improvement (:mod:`.residual_forms`), and the singles a signature they leave says are
+    not alone (``even_left``: the even harmonics of ``p_b`` each single's fit leaves,
+    :func:`unmade_signature`).
     """
 
     def hypothesis(h: Fit) -> Hypothesis:
@@ -237,6 +264,7 @@ def summarise(
         baseline_channel_nrmse=dict(baseline.held_out_nrmse),
         pairs_ruled_out=tuple(sorted(pairs_ruled_out)),
         not_alone={h.effects[0]: why for h in singles if (why := not_alone(h)) is not None},
+        even_left=dict(even_left or {}),
         form_gain=max((form_gains or {}).values(), default=1.0),
         form_gains=dict(form_gains or {}),
     )
@@ -251,6 +279,33 @@ def plausible(fit: Fit) -> bool:
     """Every effect's fitted parameters describe that physics (see Candidate.plausible)."""
     members = [candidate(name) for name in fit.effects]
     return all(member.plausible(own) for member, own in own_columns(members, fit.theta))
+
+
+def unmade_signature(name: str, left: tuple[float, float, float], noise_cost: float) -> str | None:
+    """Why single ``name`` is likely not alone by a signature its law cannot make; else None.
+
+    ``left``: the even harmonics of ``p_b`` its own fitted model leaves, their share (%), its
+    z and their power on the held-out costs' scale (:func:`.evidence.even_harmonics_left`).
+    More than ``SIGNIFICANT_Z`` standard errors of their scatter over the cycles, and more
+    than ``NOISE_EXCESS`` times the noise's share of the error (the bar below which a misfit
+    is the residue of a parameter error), beside a law the same on apply and release
+    (``Candidate.even_harmonics`` false: it cannot make them), they are another physics (air
+    whose compliance falls with the pressure, an asymmetric groove, a load share), whether
+    or not a pair identifies it.
+    """
+    share, z, power = left
+    if candidate(name).even_harmonics or not z > SIGNIFICANT_Z:
+        return None
+    if not power > NOISE_EXCESS * noise_cost:
+        return None
+    makers = ", ".join(sorted(c.name for c in CANDIDATES if c.even_harmonics))
+    return (
+        f"a second effect is likely; not identified: {name} fitted leaves even harmonics in the "
+        f"bore pressure ({share:.4f} % of its energy, {z:.0f} standard errors of their scatter "
+        f"over the cycles, {power / max(noise_cost, 1e-30):.0f} times the noise's share of the "
+        f"error) that its law, the same on apply and release, cannot make: the signature of "
+        f"one of {makers} (air's compliance falls with the pressure)"
+    )
 
 
 def not_alone(fit: Fit) -> str | None:

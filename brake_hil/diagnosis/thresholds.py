@@ -92,6 +92,10 @@ in words, not as a measured number, when the cap binds (``Verdict.capped``). A s
 betters (``Summary.hidden_partner``) is charged that pair's log odds instead.
 Evidence: docs/diagnosis.md.
 """
+SIGNIFICANT_Z = 3.0
+"""Standard errors of their own scatter over the cycles beyond which even harmonics of the bore
+pressure that a model does not make are there (``evidence.even_harmonics_z``; a chance excess
+this large is rarer than 1 in 700): a statistical bound, not tuned."""
 CHECK_ROUNDS = 3
 """Verdicts checked at most: a verdict that fails a physics check is set aside, the next checked.
 """

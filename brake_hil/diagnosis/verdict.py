@@ -368,14 +368,15 @@ def _caps(summary: Summary, standing: _Standing) -> _Caps:
     ]
     fixed = [(STAND_IN_MARGIN, SET_ASIDE)] if rejected else []
     measured: list[float] = []
-    # A single whose own fitted values show another physics beside it (Candidate.not_alone):
-    # named alone, no surer than a stand-in's replacement (nothing measures how likely).
+    # A single whose own fitted values show another physics beside it (Candidate.not_alone),
+    # or beside a signature in the evidence its law cannot make (Summary.unmade): named
+    # alone, no surer than a stand-in's replacement (nothing measures how likely).
     # One that a pair with it betters (Summary.hidden_partner): the pair's log odds, the
     # more the pair cuts its leftover the less sure it is alone.
     if chosen is not None and len(chosen.effects) == 1:
         name = chosen.effects[0]
         partner = summary.hidden_partner(name)
-        if name in summary.not_alone:
+        if name in summary.not_alone or summary.unmade(name) is not None:
             fixed.append((STAND_IN_MARGIN, NOT_ALONE))
         if partner is not None:
             single = next(h for h in summary.singles if h.effects == chosen.effects)

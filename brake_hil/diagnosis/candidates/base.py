@@ -143,6 +143,12 @@ class Candidate:
     contains: ClassVar[frozenset[str]] = frozenset()
     """Candidates this one's law holds as a special case (the groove at ``a = 0`` is plain
     stick-slip): a pair of it with one of them is no second physics and is not fitted."""
+    even_harmonics: ClassVar[bool] = False
+    """Its law can make the bore pressure's even harmonics on a symmetric cycle (it differs
+    between apply and release, or changes with the pressure: air's compliance, a load share, a
+    groove asymmetry). A law the same both ways (linear, stick-slip, Coulomb friction, an
+    orifice) cannot: named alone beside even harmonics it does not make, it is likely not alone
+    (:attr:`.summary.Summary.unmade`)."""
     retired_parameters: ClassVar[tuple[str, ...]] = ()
     """Parameter names of an older law of this physics that no longer means the same: a model
     file that has one is refused (``improved_model``), not run with another meaning."""

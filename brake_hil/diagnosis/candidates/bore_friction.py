@@ -30,6 +30,7 @@ class BoreFriction(Candidate):
     """
 
     entry = CATALOGUE["bore_friction"]
+    even_harmonics = True  # its friction grows with the pressure on the seal
     parameters = (CandidateParameter("bore_friction_coefficient", "-", 0.0, 3.0, 0.2),)
 
     def fill(self, draft: Draft, theta: FloatArray, context: Context) -> None:

@@ -73,6 +73,7 @@ class EccentricLoad(Candidate):
     """
 
     entry = CATALOGUE["eccentric_load"]
+    even_harmonics = True
     kin_forms = frozenset({("static_map", "x_c"), ("level_gain", "x_c")})  # x_c's gain vs load
     parameters = (
         CandidateParameter("share_offset", "-", -0.6, 0.6, 0.0),

@@ -12,6 +12,7 @@ from brake_hil.diagnosis.candidates.base import (
 )
 from brake_hil.diagnosis.candidates.registry import register_candidate_class
 from brake_hil.diagnosis.engine import Coupling, Entry, Term
+from brake_hil.diagnosis.thresholds import NOISE_EXCESS, SIGNIFICANT_Z
 from brake_hil.physics.catalogue import CATALOGUE
 from brake_hil.types import FloatArray
 
@@ -45,6 +46,7 @@ class EntrainedAir(Candidate):
     """
 
     entry = CATALOGUE["entrained_air"]
+    even_harmonics = True
     parameters = (CandidateParameter("air_share", "-", 1.0e-4, 0.2, 5.0e-3, logarithmic=True),)
 
     def fill(self, draft: Draft, theta: FloatArray, context: Context) -> None:
@@ -52,5 +54,19 @@ class EntrainedAir(Candidate):
         draft.add(IsothermalAir(theta[:, 0] * context.bore_volume))
 
     def consistent(self, evidence: dict[str, float]) -> bool:
-        """The bore pressure is mispredicted."""
-        return evidence.get("nrmse_p_b", 0.0) > 0.01
+        """The bore pressure carries even harmonics the baseline does not make, beyond noise.
+
+        Air's compliance falls with the pressure, so the bore is softer on the cycle's low
+        half than on its high half: even harmonics of ``p_b``, judged against their own
+        scatter over the cycles and the noise (``evidence.even_harmonics_z``, the bars of
+        :func:`.summary.unmade_signature`), not against a fixed share of the peak-to-peak (a
+        little air mispredicts ``p_b`` by well under 1 %); or ``p_b`` mispredicted by over
+        1 % (``evidence.MISMATCH_NRMSE``: segments under 16 cycles, too short for 8 pieces of
+        two cycles, show no scatter of their even harmonics).
+        """
+        noise = evidence.get("noise_nrmse", 0.0) ** 2
+        even = (
+            evidence.get("even_harmonics_z_p_b", 0.0) > SIGNIFICANT_Z
+            and evidence.get("even_harmonics_power_p_b", 0.0) > NOISE_EXCESS * noise
+        )
+        return even or evidence.get("nrmse_p_b", 0.0) > 0.01  # evidence.MISMATCH_NRMSE

@@ -169,6 +169,7 @@ class SealGrooveAsymmetry(Candidate):
     """
 
     entry = CATALOGUE["seal_groove_asymmetry"]
+    even_harmonics = True
     contains = frozenset({"seal_stick_slip"})
     lead_in = 3.0
     """s of history before the window: the seat creeps over a second or so, so a shorter run
