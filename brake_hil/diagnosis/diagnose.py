@@ -34,12 +34,6 @@ from brake_hil.diagnosis.candidates import CANDIDATES, candidate
 from brake_hil.diagnosis.dataset import Dataset, prepare
 from brake_hil.diagnosis.evidence import Evidence, collect, even_harmonics_left
 from brake_hil.diagnosis.fitting import Fit, Model, fit
-from brake_hil.diagnosis.geometry_share import (
-    checked_fit,
-    fold_geometry,
-    geometry_stand_ins,
-    recorded_pressures,
-)
 from brake_hil.diagnosis.groove import groove_asymmetry, symmetric_seals
 from brake_hil.diagnosis.physics_checks import CheckOutcome, check_hypothesis
 from brake_hil.diagnosis.residual_forms import (
@@ -70,7 +64,6 @@ from brake_hil.diagnosis.thresholds import (
     WEAK_SINGLE_RATIO,
     WINDOW_FLOOR,
 )
-from brake_hil.diagnosis.tolerance_prior import share_band
 from brake_hil.diagnosis.verdict import (
     Verdict,
     _confidence,
@@ -338,22 +331,21 @@ def _decide_with_pairs(
         p for p in unnameable_pairs(fits.baseline, fits.singles) if not _nested(*p)
     )
     pairs = fits.pairs(ruled_out)
-    band = share_band(fits.calibration.rig)
-    pressures = recorded_pressures(fits.dataset)
     left = fits.even_left()
 
     def summary_of(pairs: list[Fit]) -> Summary:
-        raw = summarise(
+        return summarise(
             fits.baseline, fits.singles, pairs, noise_cost, evidence, ruled_out, form_gains, left
-        )  # an eccentric share the geometry makes is folded beside its host (geometry_share)
-        return fold_geometry(raw, geometry_stand_ins([*fits.singles, *pairs], band, pressures))
+        )
 
     summary = summary_of(pairs)
     verdict = decide(summary)
     if unfitted_pairs_matter(summary, verdict):
         fits.say("fitting the pairs left out, as rivals or partners of the verdict")
         pairs = fits.pairs()
-        summary = summary_of(pairs)
+        summary = summarise(
+            fits.baseline, fits.singles, pairs, noise_cost, evidence, ruled_out, form_gains
+        )
         verdict = decide(summary)
     return summary, verdict, pairs
 
@@ -368,11 +360,10 @@ def _check_physics(
     checks: dict[str, list[CheckOutcome]] = {}
     rounds = 0
     while rounds < CHECK_ROUNDS:
-        chosen = verdict.chosen or ()
-        named = checked_fit(hypotheses, chosen, summary)  # with a folded geometry share
-        if named is None or "+".join(chosen) in checks:
+        named = next((h for h in hypotheses if h.effects == verdict.chosen), None)
+        if named is None or "+".join(named.effects) in checks:
             break
-        key = "+".join(chosen)
+        key = "+".join(named.effects)
         fits.say(f"checking the physics of {key}")
         checks[key] = check_hypothesis(
             fits.calibration,
@@ -388,7 +379,7 @@ def _check_physics(
         # the groove's asymmetry is read off its fit, and a law that holds one set aside
         # already (the groove holds stick-slip) is that hypothesis checked again: no round
         failed_before = [k.split("+") for k in checks if k != key]
-        again = any(_holds_all(chosen, tuple(k)) for k in failed_before)
+        again = any(_holds_all(named.effects, tuple(k)) for k in failed_before)
         rounds += failed.name != "asymmetry" and not again
         summary = replace(summary, stand_ins={**summary.stand_ins, key: failed.finding})
         verdict = decide(summary)

@@ -219,8 +219,6 @@ def explain(
         explanation += (
             f" Set aside by a physics check, {first.replace('+', ' and ')}: {finding}{also}."
         )
-    if summary.geometry:
-        explanation += f" {_geometry_words(summary.geometry, verdict.effects)}"
     doubt = summary.doubt(chosen.effects) if chosen is not None else None
     if doubt is not None:
         explanation += f" Not sure it is alone: {doubt}."
@@ -234,15 +232,6 @@ def explain(
     if verdict.effects == ("unexplained",):
         explanation += f" {residual.summary[0].upper()}{residual.summary[1:]}."
     return explanation
-
-
-def _geometry_words(geometry: dict[str, str], effects: tuple[str, ...]) -> str:
-    """Why an eccentric load fitted beside the verdict is the rig's geometry, in words."""
-    beside = [k for k in geometry if set(k.split("+")) - set(effects) == {"eccentric_load"}]
-    key = max(beside, key=len) if beside else next(iter(geometry))
-    return (
-        f"The eccentric load fitted ({key.replace('+', ' and ')}) is not named: {geometry[key]}."
-    )
 
 
 def _how_sure(summary: Summary, verdict: Verdict) -> str:

@@ -58,7 +58,6 @@ class Summary:
     even_left: dict[str, tuple[float, float, float]] = field(default_factory=dict)
     form_gain: float = 1.0  # the best generic form's held-out improvement (residual_forms)
     form_gains: dict[str, float] = field(default_factory=dict)  # "form channel": improvement
-    geometry: dict[str, str] = field(default_factory=dict)  # "a+b": eccentric share in tolerance
 
     def form_bar(self, effects: tuple[str, ...]) -> float:
         """The best generic form's improvement that counts against ``effects``.
@@ -221,7 +220,6 @@ class Summary:
             },
             form_gain=float(document.get("form_gain", 1.0)),
             form_gains={str(k): float(v) for k, v in document.get("form_gains", {}).items()},
-            geometry={str(k): str(v) for k, v in document.get("geometry", {}).items()},
         )
 
 

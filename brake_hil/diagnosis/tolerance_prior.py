@@ -183,30 +183,3 @@ def prior_covariance(
         for i, name in enumerate(names)
     }
     return covariance, setters
-
-
-def share_band(rig: Rig) -> float:
-    """One sigma (log units) of the caliper's pressure area ``A_eb`` under the rig's tolerances.
-
-    The same linear propagation as :func:`prior_covariance`: the log-derivative of ``A_eb``
-    over the log of each toleranced rig value (the piston diameter twice, the bore's area
-    ratio once), times that value's tolerance, summed in quadrature. No calibrated multiplier
-    moves ``A_eb`` (its row of ``B`` is left to no one), so this is the band of the share of
-    ``A_eb p_b`` the caliper sees within which a constant share is the rig's geometry, not an
-    eccentric load (``candidates.eccentric_load``). A rig file whose ``model:`` gives
-    ``A_eb_over_A_ep`` outright keeps the area ratio's tolerance for it.
-    """
-
-    def log_area(moved: Rig) -> float:
-        return float(np.log(derive_parameters(moved).bore_area))
-
-    base = log_area(rig)
-    variance = 0.0
-    for key in KEY_FIELDS:
-        tolerance = rig.tolerance(key)
-        if tolerance > 0.0:
-            slope = (log_area(scaled(rig, key, float(np.exp(STEP)))) - base) / STEP
-            variance += (slope * tolerance) ** 2
-    if "A_eb_over_A_ep" in rig.model_overrides:
-        variance += rig.tolerance("bore.area_ratio") ** 2
-    return float(np.sqrt(variance))

@@ -19,17 +19,6 @@ from brake_hil.types import FloatArray
 
 REFERENCE_PRESSURE = 1.0e6
 """Pressure (Pa) about which the load-dependent share is written."""
-GEOMETRY_SIGMAS = 2.0
-"""A share whose mean over the recorded pressures lies within this many sigmas of the band the
-rig's tolerances give ``A_eb`` (``tolerance_prior.share_band``) is one the geometry makes
-(about 95 % of in-tolerance rigs) ..."""
-LOAD_CHANGE = 0.03
-"""... when, over the recorded pressures, its load-dependent part moves it by less than this
-(log units, about 3 %): the geometry makes a constant share only. A design bound between what
-the other in-tolerance values leave in a fitted share's load dependence (at most 0.5 % on
-contract-spanning recordings) and the least eccentric load the seed reports (Table 5: the
-five washers' share changes by about 30 % over the recorded pressures; the bundled five-washer
-recordings fit 11 %). Evidence: docs/diagnosis.md."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -89,36 +78,3 @@ class EccentricLoad(Candidate):
     def consistent(self, evidence: dict[str, float]) -> bool:
         """x_c is off by more than p_b."""
         return evidence.get("nrmse_x_c", 0.0) > 1.5 * evidence.get("nrmse_p_b", 0.0)
-
-
-def geometry_share(theta: FloatArray, band: float, pressures: tuple[float, float]) -> str | None:
-    """Why fitted share values ``theta`` are the rig's geometry, in words; None when not.
-
-    Args:
-        theta: ``share_offset``, ``share_slope``, ``share_curvature`` as fitted.
-        band: one sigma (log) of ``A_eb`` under the rig's tolerances (``share_band``).
-        pressures: the lowest and highest bore pressure recorded (Pa).
-
-    An error of the bore's area ratio within its tolerance changes the share of ``A_eb p_b``
-    the caliper sees exactly as a constant eccentric share does, and no calibrated value
-    absorbs it: a share within ``GEOMETRY_SIGMAS`` of that band that changes with the load by
-    less than ``LOAD_CHANGE`` is a parameter error within tolerance, not evidence of an
-    eccentric load (the eccentric load's share seats with load, seed Table 5).
-    """
-    offset, slope, curvature = (float(v) for v in np.asarray(theta, dtype=float)[:3])
-    low, high = (p / REFERENCE_PRESSURE - 1.0 for p in pressures)
-    u = np.linspace(low, high, 33)
-    share = 1.0 + offset + slope * u + curvature * u**2
-    if np.any(share <= 0.0):
-        return None
-    mean = float(np.exp(np.mean(np.log(share))))
-    change = float(np.ptp(np.log(share)))
-    if abs(np.log(mean)) > GEOMETRY_SIGMAS * band or change > LOAD_CHANGE:
-        return None
-    return (
-        f"a share {mean:.3f} of A_eb p_b, within {GEOMETRY_SIGMAS:g} sigmas of the "
-        f"+-{100 * band:.0f} % the tolerances give A_eb (piston diameter, bore area ratio), "
-        f"changing by {100 * change:.1f} % over the recorded pressures (under "
-        f"{100 * LOAD_CHANGE:g} %): the rig's geometry within its tolerance, not an eccentric "
-        "load"
-    )
