@@ -8,7 +8,9 @@ the verdicts, and only then opens the labels to score them:
   often the verdict is exactly the label;
 * exact-set accuracy on pairs;
 * false-positive rate on null cases (parameter error only): any verdict but none, over all
-  nulls and split by their air (``degassed``, ``rig_file``); how often a null's verdict names
+  nulls and split by their air (``degassed``, ``rig_file``; a null with the rig file's air
+  that names ``entrained_air`` alone with ``verdict.air.state`` ``as_rig_file`` is right: the
+  physics is there and the advice says no bleeding); how often a null's verdict names
   a rig value far outside its tolerance;
 * ``unexplained`` recall on cases whose physics no candidate models;
 * ``out_of_tolerance`` found: no effect named and some ``verdict.rig_values[*].keys`` holds
@@ -56,6 +58,10 @@ NULL_AIRS = ("degassed", "rig_file")
 """The air of a null case's rig: none (degassed) or the rig file's own."""
 MORE_AIR = "more_than_rig_file"
 """``verdict.air.state`` when the diagnosis finds more air than the rig file says."""
+AS_RIG_FILE = "as_rig_file"
+"""``verdict.air.state`` when the air named is the rig file's own (no bleeding)."""
+AIR_EFFECT = "entrained_air"
+"""The effect a null with the rig file's own air may name, as the rig file's air."""
 INTERNAL_ERROR = "internal error"
 """How a case's error starts when the diagnosis itself failed on it (a bug, not its input):
 the case is scored as the verdict none and the run goes on; ``brake-hil benchmark`` then
@@ -257,6 +263,20 @@ def _rig_value_keys(result: CaseResult) -> set[str]:
     }
 
 
+def _air_as_rig_file(result: CaseResult, label: Mapping[str, object]) -> bool:
+    """A null with the rig file's own air named that air, as the rig file's (no bleeding).
+
+    The physics is there (the air's compliance follows the pressure, which the LTI model
+    linearises) and ``verdict.air`` says it is the rig file's: right, not a false positive.
+    """
+    return (
+        label["kind"] == "null"
+        and label.get("air") == "rig_file"
+        and tuple(result.effects) == (AIR_EFFECT,)
+        and _air_state(result) == AS_RIG_FILE
+    )
+
+
 def is_right(result: CaseResult, label: Mapping[str, object]) -> bool:
     """Whether the verdict is right for the case's kind (see the module docstring)."""
     kind = label["kind"]
@@ -264,6 +284,8 @@ def is_right(result: CaseResult, label: Mapping[str, object]) -> bool:
         return not result.effects and str(label.get("key")) in _rig_value_keys(result)
     if kind == "more_air":
         return _air_state(result) == MORE_AIR
+    if _air_as_rig_file(result, label):
+        return True
     expected: Sequence[str] = label["expected_effects"]  # type: ignore[assignment]
     return set(result.effects) == set(expected)
 
@@ -282,7 +304,7 @@ def family_figures(items: Sequence[Scored]) -> dict[str, object]:
             )
     sure = [(r, lab) for r, lab in items if r.confidence >= SURE and not r.error]
     wrong_sure = [r.case for r, lab in sure if not is_right(r, lab)]
-    named = lambda r, lab: bool(r.effects)  # noqa: E731
+    named = lambda r, lab: bool(r.effects) and not _air_as_rig_file(r, lab)  # noqa: E731
     return {
         "single_effect_cases": len(singles),
         "top1_accuracy_single": _share(

@@ -162,3 +162,28 @@ def test_keep_writes_each_cases_diagnosis_and_refuses_a_used_folder(
     again = main(["benchmark", str(tmp_path / "set"), "--serial", "--keep", str(keep)])
     err = capsys.readouterr().err
     assert again == 2 and "not empty" in err and err.count("\n") == 1
+
+
+def test_scoring_follows_the_verdicts_air() -> None:
+    as_file = {"air": {"state": "as_rig_file", "ratio": 1.2}}
+    more = {"air": {"state": "more_than_rig_file", "ratio": 2.6}}
+    labels = {
+        "000": {"family": "a", "kind": "null", "air": "rig_file", "expected_effects": []},
+        "001": {"family": "a", "kind": "null", "air": "rig_file", "expected_effects": []},
+        "002": {"family": "a", "kind": "null", "air": "degassed", "expected_effects": []},
+        "003": {"family": "a", "kind": "null", "air": "rig_file", "expected_effects": []},
+        "004": {"family": "a", "kind": "more_air", "ratio": 2.5, "expected_effects": []},
+    }
+    results = [
+        _result("000", ("entrained_air",), 0.95, **as_file),  # the rig file's air: right
+        _result("001", ("entrained_air",), 0.95, **more),  # "bleed" on a null: wrong
+        _result("002", ("entrained_air",), 0.95, **as_file),  # degassed: no air to name
+        _result("003", ("entrained_air", "hose_compliance"), 0.95, **as_file),  # a hose too
+        _result("004", ("entrained_air",), 0.97, **more),  # more air, found: right
+    ]
+    assert is_right(results[0], {**labels["000"], "kind": "null"})
+    figures = score(results, labels)
+    assert figures["false_positive_rate_null"] == pytest.approx(3 / 4)
+    assert figures["false_positive_rate_null_rig_file"] == pytest.approx(2 / 3)
+    assert figures["more_air_recall"] == 1.0
+    assert figures["wrong_sure_verdicts"] == ["001", "002", "003"]
