@@ -34,7 +34,9 @@ def test_emulator_frames_over_slcan_decode_to_the_run_it_plays(tmp_path: Path) -
         "output": "can",
         "can_link_path": str(link),
         "loop": False,
-        "start_delay_s": 3.0,  # the DAQ here opens the pty first, even on a busy machine
+        # the DAQ here opens the pty first, even on a busy runner (at load 8-10 it had not
+        # within 3 s, and read 1 frame of 2000)
+        "start_delay_s": 15.0,
     }
     for name, value in parameters.items():
         command += ["-p", f"{name}:={value}"]
@@ -51,7 +53,7 @@ def test_emulator_frames_over_slcan_decode_to_the_run_it_plays(tmp_path: Path) -
             bus_kwargs={"sleep_after_open": 0},
             reconnect_max_s=0.2,
         ) as daq:
-            deadline = time.monotonic() + 30.0
+            deadline = time.monotonic() + 60.0
             while emulator.poll() is None and time.monotonic() < deadline:
                 got += daq.poll(timeout=0.01)
             got += daq.poll(timeout=0.05)
