@@ -26,10 +26,9 @@ from brake_hil.topics import OUTPUT_CHANNELS
 
 __all__ = ["MAX_RUN_S", "RunLog", "score_run", "segment_lines"]
 
-MAX_RUN_S: Final = 120.0
-"""The longest run kept for scoring per segment (s of samples at the sample period): its
-first two minutes, scored at shutdown in seconds (a test procedure is about one); later
-samples are counted (``dropped_samples``), not kept."""
+MAX_RUN_S: Final = 1800.0
+"""The longest run kept for scoring per segment (s of stamps at 1 kHz: 7 series of 16 bytes a
+sample, about 200 MB); later samples are counted, not kept."""
 MIN_RUN_S: Final = 1.0
 """A run shorter than this (s, stamps every series holds) is not scored per segment."""
 SERIES: Final = ("p_i", *(f"{c}_{side}" for c in OUTPUT_CHANNELS for side in ("pred", "meas")))
@@ -42,7 +41,6 @@ class RunLog:
     def __init__(self, sample_period_s: float, max_s: float = MAX_RUN_S) -> None:
         """Keep up to ``max_s`` of samples at ``sample_period_s`` (s) per series."""
         self.sample_period_s = sample_period_s
-        self.max_s = max_s
         self._limit = int(max_s / sample_period_s)
         self._stamps = {name: array("q") for name in SERIES}
         self._values = {name: array("d") for name in SERIES}
@@ -98,10 +96,9 @@ class RunLog:
 def score_run(log: RunLog, excitation_hz: float) -> dict[str, Any]:
     """Every segment of the run scored; the JSON the comparator's summary holds.
 
-    ``{"segments": [...], "interpolated_share": ..., "dropped_samples": ...,
-    "start_stamp_ns": ...}``, each segment as ``compare --json`` gives it (without a sweep's
-    per-band points), times from the first stamp every series holds; with nothing scored,
-    ``{"segments": [], "unscored": why, ...}``.
+    ``{"segments": [...], "basis": ..., "metrics": {channel: {...}}, "interpolated_share":
+    ..., "dropped_samples": ...}``, each segment as ``compare --json`` gives it (without a
+    sweep's per-band points); with nothing scored, ``{"segments": [...], "unscored": why}``.
     """
     try:
         grid, series, interpolated = log.aligned()
@@ -121,14 +118,19 @@ def score_run(log: RunLog, excitation_hz: float) -> dict[str, Any]:
     document: dict[str, Any] = {
         "interpolated_share": interpolated,
         "dropped_samples": log.dropped,
-        "kept_s": log.max_s,
         "start_stamp_ns": int(grid[0]),
     }
     try:
         comparison = score_prediction(recording, predicted, excitation_hz, mean)
     except BrakeHilError as err:
         return {"segments": [], "unscored": str(err), **document}
-    return {"segments": [s.as_dict(response=False) for s in comparison.segments], **document}
+    segments = [s.as_dict(response=False) for s in comparison.segments]
+    return {
+        "segments": segments,
+        "basis": "non_idle_segments",
+        "metrics": comparison.metrics(),
+        **document,
+    }
 
 
 def segment_lines(document: dict[str, Any]) -> list[str]:
@@ -139,12 +141,6 @@ def segment_lines(document: dict[str, Any]) -> list[str]:
     if not document.get("segments"):
         return [f"no segment scored: {document.get('unscored', 'nothing received')}"]
     lines = []
-    if document.get("dropped_samples"):
-        lines.append(
-            f"the run's first {document.get('kept_s', MAX_RUN_S):g} s only: "
-            f"{document['dropped_samples']} later "
-            "samples not kept"
-        )
     for segment in document["segments"]:
         where = f"{segment['kind']} {segment['t_start']:.1f}-{segment['t_end']:.1f} s"
         if segment["kind"] == "idle":

@@ -27,13 +27,12 @@ Parameters: :class:`~brake_hil.nodes.settings.ComparatorSettings` (``config/node
 shutdown the run's per-channel means over every steady cycle scored go to ``summary_file``
 as JSON.
 
-It also keeps the run (with the measured ``p_i`` of ``/brake/master_cylinder/pressure``, its
-first 2 min) and at shutdown scores every segment of it, as ``compare`` and ``regress``
+It also keeps the whole run (with the measured ``p_i`` of ``/brake/master_cylinder/pressure``,
+up to 30 min) and at shutdown scores every segment of it, as ``compare`` and ``regress``
 score a recording (:mod:`brake_hil.live.run_segments`: pulsing, sweeps, ramps, holds, steps,
 modulated trains, each with its own metric): logged, and in the summary's ``segments``. A
 ramp or a sweep, which holds no steady cycle, is scored there; a run that scored neither
-says so. The summary is written before that scoring (its ``segments`` then say it was cut
-short) and replaced once it is done.
+says so.
 """
 
 from __future__ import annotations

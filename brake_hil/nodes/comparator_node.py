@@ -10,7 +10,6 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 import math
-import os
 import struct
 import time
 from typing import Any
@@ -359,9 +358,6 @@ class ComparatorNode(common.LoopNode):
             self._take()
             self._evaluate(final=True)
         summary = self.summary()
-        # today's figures first: a stop that cuts the segments' scoring short loses none
-        summary["segments"] = {"segments": [], "unscored": "the run's scoring was cut short"}
-        common.write_summary(self.settings.summary_file, summary)
         summary["segments"] = self.segment_summary()
         for line in segment_lines(summary["segments"]):
             self.get_logger().info(line)
@@ -371,10 +367,7 @@ class ComparatorNode(common.LoopNode):
                     f"{key} {entry[key]:.4g}" for key in METRIC_KEYS if math.isfinite(entry[key])
                 )
                 self.get_logger().info(f"{channel}: {text} over {entry['cycles']} cycles")
-        if self.settings.summary_file:  # replaced whole: a reader never finds half of it
-            partial = f"{self.settings.summary_file}.partial"
-            common.write_summary(partial, summary)
-            os.replace(partial, self.settings.summary_file)
+        common.write_summary(self.settings.summary_file, summary)
 
 
 def _ignore(stamp: int, value: float) -> None:
