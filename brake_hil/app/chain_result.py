@@ -104,7 +104,7 @@ class ChainResult:
         replay = source.get("period_error", {})
         return [
             judge_samples(*self.sample_losses()),
-            judge_cycles(scored, self.expected_cycles, unpaired, _segments(comparator)),
+            judge_cycles(scored, self.expected_cycles, unpaired),
             judge_real_time(
                 self.schedule_s, _seconds(replay.get("max_us")), _seconds(latency.get("max_us"))
             ),
@@ -118,12 +118,6 @@ class ChainResult:
     def verdict(self) -> tuple[int, list[str], list[str]]:
         """Exit status, the lines that hold and the lines that fail (:func:`verdict`)."""
         return verdict(self.judgements(), self.failed)
-
-
-def _segments(comparator: Mapping[str, Any] | None) -> Mapping[str, Any] | None:
-    """The comparator summary's per-segment scoring, when it holds one."""
-    found = (comparator or {}).get("segments")
-    return found if isinstance(found, Mapping) else None
 
 
 def _seconds(value_us: float | None) -> float | None:
@@ -226,16 +220,13 @@ def judge_cycles(
     scored: Mapping[str, int] | None,
     expected: Mapping[str, int] | None,
     unpaired: Mapping[str, Mapping[str, int]] | None = None,
-    segments: Mapping[str, Any] | None = None,
 ) -> Judgement:
     """Steady cycles scored per channel against those the recording holds (``expected``).
 
     ERROR when a channel scored fewer than :data:`MIN_CYCLE_SHARE` of its expected cycles, or
     none with no expectation known, or when the counts are missing; WARN when the recording
-    holds no steady cycle and the comparator scored no segment of it either (nothing
-    compared); OK when it holds none but its segments were scored (``segments``: the
-    comparator summary's, :func:`~brake_hil.live.run_segments.score_run`). ``unpaired``: the
-    comparator's unpaired samples by reason per channel, said as the why.
+    holds no steady cycle (nothing to compare). ``unpaired``: the comparator's unpaired
+    samples by reason per channel, said as the why.
     """
     if scored is None:
         return Judgement(ERROR, "cannot tell what was compared: no comparator summary")
@@ -245,12 +236,6 @@ def judge_cycles(
             return Judgement(OK, f"steady cycles scored: {counts}")
         return Judgement(ERROR, f"a channel compared nothing: steady cycles scored {counts}")
     if not any(expected.values()):
-        found = [s for s in (segments or {}).get("segments", []) if s.get("metrics")]
-        if found:
-            kinds = ", ".join(dict.fromkeys(str(s["kind"]) for s in found))
-            return Judgement(
-                OK, f"no steady 5 Hz cycle; {len(found)} segments scored each ({kinds})"
-            )
         return Judgement(WARN, "nothing compared: the recording holds no steady 5 Hz cycle")
     counts = ", ".join(f"{c} {scored.get(c, 0)} of {n}" for c, n in expected.items())
     short = [c for c, n in expected.items() if scored.get(c, 0) < MIN_CYCLE_SHARE * n]

@@ -209,11 +209,6 @@ def result_lines(result: ChainResult) -> list[str]:
                 )
             else:
                 lines.append(f"{channel:8s}  no steady cycle scored")
-        if isinstance(comparator.get("segments"), dict):
-            from brake_hil.live.run_segments import segment_lines
-
-            lines.append("segments of the run (comparator, each scored as compare scores it):")
-            lines += [f"  {line}" for line in segment_lines(comparator["segments"])]
     model = result.model
     if model is not None:
         counters = model["counters"]

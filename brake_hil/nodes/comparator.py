@@ -26,13 +26,6 @@ parameters are read-only, set at start.
 Parameters: :class:`~brake_hil.nodes.settings.ComparatorSettings` (``config/nodes.yaml``); at
 shutdown the run's per-channel means over every steady cycle scored go to ``summary_file``
 as JSON.
-
-It also keeps the whole run (with the measured ``p_i`` of ``/brake/master_cylinder/pressure``,
-up to 30 min) and at shutdown scores every segment of it, as ``compare`` and ``regress``
-score a recording (:mod:`brake_hil.live.run_segments`: pulsing, sweeps, ramps, holds, steps,
-modulated trains, each with its own metric): logged, and in the summary's ``segments``. A
-ramp or a sweep, which holds no steady cycle, is scored there; a run that scored neither
-says so.
 """
 
 from __future__ import annotations

@@ -27,17 +27,11 @@ from brake_hil.analysis.stamp_scoring import (
     peak_stamp_ns,
 )
 from brake_hil.errors import BrakeHilError
-from brake_hil.live.run_segments import RunLog, score_run, segment_lines
 from brake_hil.nodes import common
 from brake_hil.nodes.comparator import NAME
 from brake_hil.nodes.settings import ComparatorSettings
 from brake_hil.runtime import DeadlineLoop, Tick
-from brake_hil.topics import (
-    MASTER_CYLINDER_PRESSURE,
-    MEASURED_OUTPUTS,
-    OUTPUT_CHANNELS,
-    PREDICTED_OUTPUTS,
-)
+from brake_hil.topics import MEASURED_OUTPUTS, OUTPUT_CHANNELS, PREDICTED_OUTPUTS
 
 CHANNEL_LAG_NS = 10_000_000_000
 """A channel whose pairs lag the others' by more than this (ns) no longer holds their scoring
@@ -126,17 +120,12 @@ class ComparatorNode(common.LoopNode):
         self.evaluations = 0  # cycles evaluated
         self.corrupt = 0  # messages too short to decode
         self.evaluation_errors = 0  # windows whose scoring raised
-        self.run_log = RunLog(sample_period)  # the whole run, scored per segment at the end
-        self._inputs: list[tuple[common.PolledInput, Callable[[int, float], None], str]] = []
+        self._inputs: list[tuple[common.PolledInput, Callable[[int, float], None]]] = []
         topics = zip(OUTPUT_CHANNELS, MEASURED_OUTPUTS, PREDICTED_OUTPUTS)
         for channel, measured, predicted in topics:
             pairer = self.pairers[channel]
-            for spec, add, side in (
-                (measured, pairer.add_measured, "meas"),
-                (predicted, pairer.add_predicted, "pred"),
-            ):
-                self._inputs.append((common.PolledInput(self, spec), add, f"{channel}_{side}"))
-        self._inputs.append((common.PolledInput(self, MASTER_CYLINDER_PRESSURE), _ignore, "p_i"))
+            self._inputs.append((common.PolledInput(self, measured), pairer.add_measured))
+            self._inputs.append((common.PolledInput(self, predicted), pairer.add_predicted))
         self._outputs = [
             self.create_publisher(DiagnosticArray, topic, common.DIAGNOSTICS_QOS)
             for topic in (common.COMPARISON_TOPIC, common.DIAGNOSTICS_TOPIC)
@@ -157,10 +146,8 @@ class ComparatorNode(common.LoopNode):
             self._evaluate()
 
     def _take(self) -> None:
-        for polled, add, name in self._inputs:
+        for polled, add in self._inputs:
             read = polled.read
-            stamps: list[int] = []
-            values: list[float] = []
             for data, _ in polled.take_all():
                 try:
                     stamp, value = read(data)
@@ -168,10 +155,6 @@ class ComparatorNode(common.LoopNode):
                     self.corrupt += 1
                     continue
                 add(stamp, value)
-                stamps.append(stamp)
-                values.append(value)
-            if stamps:
-                self.run_log.extend(name, stamps, values)
 
     def _evaluate(self, final: bool = False) -> None:
         """Score every cycle whose window (and guard period) the paired samples now cover.
@@ -344,23 +327,13 @@ class ComparatorNode(common.LoopNode):
             channels[channel] = entry
         return {"window_cycles": self._window_cycles, "metrics": channels}
 
-    def segment_summary(self) -> dict[str, Any]:
-        """The whole run scored per segment (:func:`~brake_hil.live.run_segments.score_run`)."""
-        return score_run(self.run_log, 1.0 / self.period_s)
-
     def close(self) -> None:
-        """Stop the loop, score what has arrived, log the summary and write it.
-
-        The summary's ``segments`` score the whole run per segment, as ``compare`` does.
-        """
+        """Stop the loop, score what has arrived, log the summary and write it."""
         self._loop.stop()
         if self.context.ok() and self._loop.error is None:
             self._take()
             self._evaluate(final=True)
         summary = self.summary()
-        summary["segments"] = self.segment_summary()
-        for line in segment_lines(summary["segments"]):
-            self.get_logger().info(line)
         for channel, entry in summary["metrics"].items():
             if entry["cycles"]:
                 text = ", ".join(
@@ -368,10 +341,6 @@ class ComparatorNode(common.LoopNode):
                 )
                 self.get_logger().info(f"{channel}: {text} over {entry['cycles']} cycles")
         common.write_summary(self.settings.summary_file, summary)
-
-
-def _ignore(stamp: int, value: float) -> None:
-    """``p_i`` is not paired: it is only kept for the run's segments."""
 
 
 def main(args: list[str] | None = None) -> int:
