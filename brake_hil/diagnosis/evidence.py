@@ -112,7 +112,7 @@ class _Findings:
     def __init__(self, dataset: Dataset, parts: list[SegmentSignals]) -> None:
         self.ds = dataset
         self.parts = parts
-        self.steady = [p for p in parts if p.window.kind == "steady"]  # today's windows
+        self.steady = [p for p in parts if p.window.kind == "steady"]  # steady pulsing
         self.scale = dataset.scale()
         self.values: dict[str, float] = {}
         self.findings: list[str] = []
@@ -228,7 +228,7 @@ class _Findings:
                 (measured[1] + measured[3]) - (predicted[1] + predicted[3])
             )
         _, z, power = even_harmonics_z(
-            self.parts, "p_b", rate, 1.0 / self.ds.period, self.scale["p_b"]
+            self.steady, "p_b", rate, 1.0 / self.ds.period, self.scale["p_b"]
         )
         values["even_harmonics_z_p_b"] = z
         values["even_harmonics_power_p_b"] = power
@@ -358,10 +358,14 @@ def _even_share(signal: FloatArray, rate: float, fundamental: float) -> float | 
 
 
 def even_harmonics_left(model: Model, theta: FloatArray) -> tuple[float, float, float]:
-    """The even harmonics of ``p_b`` ``model`` leaves at ``theta`` (:func:`even_harmonics_z`)."""
+    """The even harmonics of ``p_b`` ``model`` leaves at ``theta`` (:func:`even_harmonics_z`).
+
+    Over the steady pulsing segments only: harmonics of the pulsing frequency mean nothing
+    on a sweep or a ramp.
+    """
     ds = model.dataset
     return even_harmonics_z(
-        segment_signals(model, theta),
+        [p for p in segment_signals(model, theta) if p.window.kind == "steady"],
         "p_b",
         1.0 / ds.sample_time,
         1.0 / ds.period,
