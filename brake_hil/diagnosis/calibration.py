@@ -7,8 +7,11 @@ caliper stiffness ``k_c``, needle-valve resistance ``R_v``, the seal's ``k_eh`` 
 the fluid's air fraction (eq. 18: it sets ``C_b`` and ``C_i`` at every pressure, so an
 error in it changes the compliance more at low pressure than at high, which one multiplier of
 ``C_b`` cannot follow; a rig file that overrides ``C_b`` gets a ``C_b`` multiplier instead),
-and the hose wall's Young's modulus (its swelling is the part of ``C_b`` that does not change
-with pressure; left out, a 10 % error in it was named hose_compliance on null recordings).
+the hose wall's Young's modulus (its swelling is the part of ``C_b`` that does not change
+with pressure; left out, a 10 % error in it was named hose_compliance on null recordings),
+and the caliper's force area ``A_eb`` (the share of the pressure force the caliper body sees:
+the piston diameter and the bore's area ratio, 10 % each, move it by up to a fifth; left out,
+that share was named ``eccentric_load`` on null recordings and beside the right effect).
 Every other toleranced rig value that reaches the model (bore length, piston diameter, the
 bore's area ratio, fluid bulk modulus, line geometry, viscosity ...) is carried into the prior
 (:mod:`.tolerance_prior`): the prior of the multipliers is the covariance its tolerances give
@@ -60,6 +63,7 @@ UNCERTAIN = (
     Uncertain("effective_hydraulic_damping", "seal.loss_factor", 0.5),
     Uncertain("air_fraction", "fluid.air_fraction", 0.3),
     Uncertain("hose_stiffness", "hose.youngs_modulus", 0.0),
+    Uncertain("bore_area", "bore.area_ratio", 0.0),
 )
 BORE_COMPLIANCE = Uncertain("bore_compliance", "fluid.air_fraction", 0.3)
 """Replaces ``air_fraction`` when the rig file overrides ``C_b``."""
@@ -80,6 +84,7 @@ MODEL_KEYS = {
     "bore_compliance": "C_b",
     "block_stiffness": "k_k",
     "line_inertance": "I_line",
+    "bore_area": "A_eb_over_A_ep",
 }
 """The ``model:`` key that overrides each calibrated quantity outright (docs/interface.md)."""
 HOLD_BELOW = 1.0

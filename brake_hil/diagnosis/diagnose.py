@@ -33,7 +33,7 @@ from brake_hil.diagnosis.calibration import Calibration, calibrate
 from brake_hil.diagnosis.candidates import CANDIDATES, candidate
 from brake_hil.diagnosis.dataset import Dataset, prepare
 from brake_hil.diagnosis.evidence import Evidence, collect, even_harmonics_left
-from brake_hil.diagnosis.fitting import Fit, Model, fit
+from brake_hil.diagnosis.fitting import Fit, Model, fit, fit_from_both
 from brake_hil.diagnosis.groove import groove_asymmetry, symmetric_seals
 from brake_hil.diagnosis.physics_checks import CheckOutcome, check_hypothesis
 from brake_hil.diagnosis.residual_forms import (
@@ -371,7 +371,7 @@ def _check_physics(
             fits.baseline,
             named,
             required_ratio(summary),
-            symmetric_seals(fits.baseline, fits.singles),
+            symmetric_seals(fits.baseline, fits.singles, hypotheses, named.effects),
         )
         failed = next((c for c in checks[key] if not c.passed), None)
         if failed is None:
@@ -396,7 +396,7 @@ def _try_fit(
     diagnosis.
     """
     try:
-        return [fit(model, start=start)]
+        return [fit(model, start=start) if start is not None else fit_from_both(model)]
     except FitError as error:
         unfitted.append("+".join(model.names))
         say(f"left out: {error}")
@@ -438,15 +438,34 @@ def fit_pairs(
     if not eligible or fit_gain(baseline, eligible[0]) < PAIR_FIT_RATIO:
         return []
     best = eligible[0]
-    own = len(best.theta) - len(calibration.sigmas)
-    pairs = []
+    by_name = {h.effects[0]: h for h in singles}
+    pairs: list[Fit] = []
     for other in eligible[1 : PAIR_SHORTLIST + 1]:
         names = (best.effects[0], other.effects[0])
         if names in ruled_out or _nested(*names):
             continue
-        say(f"fitting {' + '.join(names)}")
-        other_own = len(other.theta) - len(calibration.sigmas)
-        start = np.concatenate([best.theta[:own], other.theta[:other_own], best.theta[own:]])
-        model = Model(calibration, [candidate(n) for n in names], dataset)
-        pairs.extend(_try_fit(model, start, unfitted, say))
+        for twin in (names, *_simpler_twins(names)):
+            if twin in ruled_out or any(h.effects == twin for h in pairs):
+                continue
+            if not all(n in by_name for n in twin):
+                continue
+            say(f"fitting {' + '.join(twin)}")
+            own = [by_name[n].theta[: -len(calibration.sigmas) or None] for n in twin]
+            shared = by_name[twin[0]].theta[len(own[0]) :]
+            model = Model(calibration, [candidate(n) for n in twin], dataset)
+            pairs.extend(_try_fit(model, np.concatenate([*own, shared]), unfitted, say))
     return pairs
+
+
+def _simpler_twins(names: tuple[str, ...]) -> list[tuple[str, ...]]:
+    """``names`` with one law replaced by a special case it holds (the groove by stick-slip).
+
+    The pair of the simpler law is fitted beside the pair of the law that holds it, so the
+    groove's asymmetry is judged against a symmetric seal in the same company.
+    """
+    return [
+        (*names[:i], simpler, *names[i + 1 :])
+        for i, name in enumerate(names)
+        for simpler in sorted(candidate(name).contains)
+        if simpler not in names
+    ]

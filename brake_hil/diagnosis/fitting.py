@@ -43,6 +43,11 @@ FIT_DECIMATION = 2
 """Every n-th sample of a window enters the fit's residuals."""
 PRIOR_SPAN = 3.0
 """Calibration multipliers may move this many prior sigmas in a candidate's fit."""
+RESTART_SIGMAS = 1.0
+"""A calibration that moved a value more than this many prior sigmas may have taken a single's
+physics in its place (``x_c`` acquired late: the caliper's stiffness and force area both
+lowered, to lag it), and a fit started there can stay near it: each single is then also fitted
+from the rig file's values (:func:`fit_from_both`), and the better training fit kept."""
 
 
 @dataclass(frozen=True)
@@ -317,6 +322,28 @@ def fit(model: Model, start: FloatArray | None = None, max_iterations: int = 15)
         except (ValueError, np.linalg.LinAlgError) as error:
             raise FitError(f"{name}: the fit failed: {error}") from error
     return _scored(model, name, result, search.whiten.shape[0])
+
+
+def fit_from_both(model: Model) -> Fit:
+    """``fit(model)`` from the calibrated values, and from the rig file's too when needed.
+
+    The second start is taken when the calibration moved a value more than
+    ``RESTART_SIGMAS`` prior sigmas; the better training fit is kept.
+
+    Raises:
+        FitError: as :func:`fit`, from the calibrated start.
+    """
+    fitted = fit(model)
+    moved = model.calibration.prior_z()
+    if not moved or max(abs(z) for z in moved.values()) <= RESTART_SIGMAS:
+        return fitted
+    start = model.start()
+    start[model.effect_size :] = 1.0
+    try:
+        again = fit(model, start=start)
+    except FitError:
+        return fitted
+    return again if again.train_cost < fitted.train_cost else fitted
 
 
 class _Search:

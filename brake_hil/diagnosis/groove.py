@@ -144,9 +144,21 @@ def seal_asymmetry(fit: Fit, symmetric: Sequence[Fit] = ()) -> GrooveAsymmetry |
     return GrooveAsymmetry(a, sigma, _ratio(a), (_ratio(low), _ratio(high)), cut)
 
 
-def symmetric_seals(baseline: Fit, singles: Sequence[Fit]) -> list[Fit]:
-    """The symmetric seals a groove is held against: the baseline and stick-slip's single."""
-    return [baseline, *(h for h in singles if h.effects == (STICK_SLIP,))]
+def symmetric_seals(
+    baseline: Fit,
+    singles: Sequence[Fit],
+    hypotheses: Sequence[Fit] = (),
+    effects: Sequence[str] = (),
+) -> list[Fit]:
+    """The symmetric seals a groove is held against.
+
+    The baseline and stick-slip's single, and, for a hypothesis of the groove with other
+    ``effects``, the same with plain stick-slip in the groove's place when it was fitted (a
+    symmetric seal in the same company).
+    """
+    twin = {STICK_SLIP if e == GROOVE else e for e in effects}
+    same_company = [h for h in hypotheses if GROOVE in effects and set(h.effects) == twin]
+    return [baseline, *(h for h in singles if h.effects == (STICK_SLIP,)), *same_company]
 
 
 def groove_asymmetry(

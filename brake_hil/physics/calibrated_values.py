@@ -40,5 +40,10 @@ VALUE_LABELS: Final[Mapping[str, ValueLabel]] = {
     "air_fraction": ValueLabel("fluid air fraction", "air in the fluid: bleed the circuit"),
     "bore_compliance": ValueLabel("bore compliance C_b", "air in the fluid: bleed the circuit"),
     "hose_stiffness": ValueLabel("hose wall modulus", "hose ageing or a new hose"),
+    "bore_area": ValueLabel(
+        "caliper force area A_eb",
+        "check the piston diameter and the caliper's seating (uneven load)",
+        "the share of the pressure force the caliper body sees",
+    ),
 }
 """Every value the calibration may fit, by its name (a test holds it to the calibration)."""

@@ -106,3 +106,31 @@ def test_a_late_input_is_fitted_to_the_noise_reading_the_run_past_its_window(
     monkeypatch.setattr(type(delay[0]), "lookahead", 0.0)
     held = fit(Model(calibration, delay, dataset))
     assert held.held_out_cost > 3.0 * fitted.held_out_cost
+
+
+def test_a_single_is_also_fitted_from_the_rig_files_values_when_the_calibration_moved_far(
+    default_rig: Rig,
+) -> None:
+    """``x_c`` acquired 3 ms late: the calibration lags it by lowering the caliper's stiffness
+    and force area (about 1.9 sigmas each), and a delay fitted from there stays near it (a
+    0.3 ms delay of ``p_b`` and 0.7 ms of ``F_k`` beside x_c's). Fitted from the rig file's
+    values too, the better fit is the truth: x_c late, the others on time."""
+    from brake_hil.diagnosis.candidates import candidate
+    from brake_hil.diagnosis.fitting import RESTART_SIGMAS, fit_from_both
+    from brake_hil.virtual_rig.effects import make_effect
+    from brake_hil.virtual_rig.excitation import seed_pulsing
+    from brake_hil.virtual_rig.simulator import simulate_rig
+
+    late = make_effect("sensor_delay", 0.75, channel="x_c")
+    pulsing = seed_pulsing((1.38e6, 2.07e6, 2.76e6), pulsing_s=3.0)
+    dataset = prepare(
+        simulate_rig(default_rig, [late], pulsing, seed=25).as_recording(), default_rig
+    )
+    calibration = calibrate(dataset, default_rig)
+    assert max(abs(z) for z in calibration.prior_z().values()) > RESTART_SIGMAS
+    model = Model(calibration, [candidate("sensor_delay")], dataset)
+    both = fit_from_both(model)
+    assert both.train_cost <= fit(model).train_cost
+    delays = both.parameters()
+    assert delays["delay_x_c"] == pytest.approx(3.0e-3, abs=0.2e-3)
+    assert max(delays["delay_p_b"], delays["delay_F_k"]) < 0.1e-3

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -13,6 +15,7 @@ from brake_hil.diagnosis.groove import (
     STICK_SLIP,
     groove_asymmetry,
     seal_asymmetry,
+    symmetric_seals,
 )
 from brake_hil.diagnosis.physics_checks import asymmetry_check
 from brake_hil.physics.excitation import pulsing_profile
@@ -79,6 +82,23 @@ def test_a_groove_far_better_than_every_symmetric_seal_is_asymmetric() -> None:
     assert seal_asymmetry(wide, [BASELINE, worse_stick]).asymmetric  # type: ignore[union-attr]
     # against a stick-slip that fits as well, the same interval is not resolved
     assert not seal_asymmetry(wide, [BASELINE, STICK]).resolved  # type: ignore[union-attr]
+
+
+def test_a_groove_beside_another_effect_is_held_against_stick_slip_beside_it() -> None:
+    """A groove with an eccentric load is judged against stick-slip with the same load, not
+    against stick-slip alone: alone, the seal leaves the load's share of the error too, and a
+    symmetric five-washer seal came out a resolved groove."""
+    pair = replace(_groove(-0.03, 0.2, cost=1.0e-6), effects=(GROOVE, "eccentric_load"))
+    stick_alone = _symmetric((STICK_SLIP,), 20e-6)
+    stick_beside = _symmetric(("eccentric_load", STICK_SLIP), 1.05e-6)
+    seals = symmetric_seals(BASELINE, [stick_alone], [stick_alone, stick_beside], pair.effects)
+    assert seals == [BASELINE, stick_alone, stick_beside]
+    assert seal_asymmetry(pair, [BASELINE, stick_alone]).asymmetric  # type: ignore[union-attr]
+    assert not seal_asymmetry(pair, seals).asymmetric  # type: ignore[union-attr]
+    assert symmetric_seals(BASELINE, [stick_alone], [stick_beside], (STICK_SLIP,)) == [
+        BASELINE,
+        stick_alone,
+    ]
 
 
 def test_only_a_seal_verdict_carries_the_groove() -> None:

@@ -142,3 +142,36 @@ def test_next_steps_say_to_correct_the_rig_file_when_only_a_value_is_off(tmp_pat
     assert "Correct the rig file or the rig" in page and "caliper stiffness at 0.50" in page
     assert "The rig file's model stands" not in page
     assert "The rig file's model stands" in next_steps("rec", tmp_path, None, False, [])
+
+
+def test_the_caliper_force_area_is_calibrated_under_the_geometry_tolerances() -> None:
+    """The piston diameter (10 %) and the bore's area ratio (10 %) set the caliper's force
+    area ``A_eb`` together: its prior is their tolerances carried into it."""
+    rig = load_rig(RIG_FILE)
+    sigmas, setters = _sigmas(rig)
+    assert set(setters["bore_area"]) == {"pistons.diameter", "bore.area_ratio"}
+    assert 0.15 < sigmas["bore_area"] < 0.3
+    exact = replace(rig, tolerances={**rig.tolerances, "bore.area_ratio": 0.0})
+    assert "bore_area" not in {u.name for u in uncertain_values(exact)}
+
+
+def test_a_force_area_within_its_tolerance_leaves_the_baseline_at_the_noise(
+    default_rig: Rig,
+) -> None:
+    """A rig whose bore area ratio is 12 % under the rig file's (within its 10 % one-sigma
+    tolerance) is no evidence of physics: the calibrated baseline finds the share and leaves
+    the noise (twice its cost). Without the force area among the calibrated values, the
+    baseline left 130 times the noise's cost, and an eccentric load took it."""
+    from brake_hil.diagnosis.calibration import calibrate
+    from brake_hil.diagnosis.dataset import prepare
+    from brake_hil.diagnosis.fitting import Model, fit
+    from brake_hil.virtual_rig.excitation import seed_pulsing
+    from brake_hil.virtual_rig.simulator import simulate_rig
+
+    truth = replace(default_rig, bore_area_ratio=0.88 * default_rig.bore_area_ratio)
+    run = simulate_rig(truth, [], seed_pulsing((1.38e6, 2.76e6), pulsing_s=3.0), seed=5)
+    dataset = prepare(run.as_recording(), default_rig)
+    calibration = calibrate(dataset, default_rig)
+    assert calibration.multipliers["bore_area"] == pytest.approx(0.88, abs=0.04)
+    baseline = fit(Model(calibration, [], dataset))
+    assert baseline.held_out_cost < 4.0 * dataset.noise_cost()
