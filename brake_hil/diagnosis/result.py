@@ -259,16 +259,19 @@ def _nothing_named(
             f"measurement noise's share, and no candidate explains it: the best, "
             f"{best.effects[0]}, cuts the error {fit_gain(baseline, best):.2f} times."
         )
-    return (
-        f"The calibrated LTI model explains the recording: NRMSE on the held-out cycles at "
-        f"most {baseline_nrmse:.4f}, {summary.excess_ratio:.1f} times the "
-        f"measurement noise's share of the error"
-        + (
-            f" (under {NOISE_EXCESS:g}: nothing left to name)."
-            if summary.excess_ratio < NOISE_EXCESS
-            else f"; the best candidate, {best.effects[0]}, cuts the error only "
-            f"{fit_gain(baseline, best):.2f} times."
+    if summary.excess_ratio < NOISE_EXCESS:
+        return (
+            f"The calibrated LTI model explains the recording: NRMSE on the held-out cycles "
+            f"at most {baseline_nrmse:.4f}, {summary.excess_ratio:.1f} times the measurement "
+            f"noise's share of the error (under {NOISE_EXCESS:g}: nothing left to name)."
         )
+    return (
+        f"Nothing named: the calibrated LTI model misses the held-out cycles by NRMSE at most "
+        f"{baseline_nrmse:.4f}, {summary.excess_ratio:.1f} times the measurement noise's share "
+        f"of the error, but what it leaves has no shape a candidate or a generic form explains "
+        f"(the best candidate, {best.effects[0]}, cuts the error only "
+        f"{fit_gain(baseline, best):.2f} times); an effect weaker than that leftover would not "
+        f"show."
     )
 
 

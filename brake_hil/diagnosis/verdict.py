@@ -37,6 +37,7 @@ from brake_hil.diagnosis.thresholds import (
 __all__ = [
     "CAME_CLOSE",
     "NOT_ALONE",
+    "MAY_HIDE",
     "SET_ASIDE",
     "Verdict",
     "confidence_text",
@@ -59,6 +60,11 @@ SET_ASIDE = "a better fit failed a physics check"
 """The words of a confidence capped because a better-scoring hypothesis was set aside."""
 CAME_CLOSE = "a library effect came close: it passed every rule but the generic forms' bar"
 """The words of an ``unexplained`` capped because a library effect missed only that bar."""
+MAY_HIDE = "the LTI model leaves more than the noise, unshaped, and a weaker effect may hide in it"
+"""The words of a none reached above the noise floor (``NOISE_EXCESS``): what the model leaves
+has no shape any candidate or generic form explains, so nothing is named, but the posterior's
+share of none weighs only the hypotheses fitted, and an effect weaker than the leftover (a
+weak hose beside a transducer's drifting zero) would not show."""
 
 
 @dataclass(frozen=True)
@@ -231,7 +237,7 @@ def decide(summary: Summary) -> Verdict:
     verdict = decide_effects(summary)
     share = posterior(summary).of(verdict.effects)
     ceiling = _confidence(STAND_IN_MARGIN)
-    if verdict.capped == CAME_CLOSE and share <= ceiling:
+    if verdict.capped in (CAME_CLOSE, MAY_HIDE) and share <= ceiling:
         verdict = dataclasses.replace(verdict, capped=None)  # the posterior doubts it more
     if verdict.capped is not None:
         share = min(share, ceiling)
@@ -492,6 +498,8 @@ def _not_named(summary: Summary, standing: _Standing, cap: _Caps) -> Verdict:
         # the effect is absent is then no surer than a stand-in's replacement.
         capped = CAME_CLOSE
     effects = ("unexplained",) if unexplained else ()
+    if not unexplained and capped is None:
+        capped = MAY_HIDE  # above the noise floor (decide_effects): the leftover is unnamed
     return Verdict(effects, _confidence(margin), None, margin, capped)
 
 

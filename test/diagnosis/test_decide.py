@@ -90,6 +90,20 @@ def with_air_cost(weak: Summary, cost: float) -> Summary:
     return dataclasses.replace(weak, singles=(air, *weak.singles[1:]))
 
 
+def test_a_none_above_the_noise_floor_says_a_weaker_effect_may_hide() -> None:
+    """The baseline leaves 20 times the noise's share, unshaped, and no candidate cuts it:
+    none is named, capped in words (the posterior weighs only the hypotheses fitted); under
+    the floor, none is the evidence's own share."""
+    leftover = summary(single("hose_compliance", BASE / 1.3), base=1e-6)
+    above = dataclasses.replace(leftover, noise_cost=1e-6 / 20)
+    verdict = decide(above)
+    assert verdict.effects == () and verdict.capped == rules.MAY_HIDE
+    assert verdict.confidence <= rules._confidence(rules.STAND_IN_MARGIN)
+    assert "likely" in verdict.confidence_text()
+    below = decide(dataclasses.replace(leftover, noise_cost=1e-6 / 4))
+    assert below.effects == () and below.capped is None
+
+
 def test_under_the_floor_only_a_weak_single_that_explains_it_all_is_named() -> None:
     """A little air: the misfit is 5 times the noise, air alone cuts it 4 times and leaves
     1.25 times the noise, nothing else more than 1.3 times. A parameter error's residue
