@@ -143,7 +143,8 @@ def _title(axis: Axes, series: Series) -> None:
         Movement.TOO_FEW: f"under {TREND_RUNS} runs: no trend test",
         Movement.STEADY: "no trend",
     }[series.movement]
-    colour = FOUND if series.finding is not None else "black"
+    colour = FOUND if series.finding is not None and not series.stand_in else "black"
+    state = f"{state} in the LTI model only" if series.stand_in else state
     axis.set_title(f"{series.words}: {state}", fontsize=9, color=colour)
 
 

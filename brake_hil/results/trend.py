@@ -191,6 +191,7 @@ class Series:
     movement: Movement
     finding: str | None  # the line in plain words (drift, offset, grew); None otherwise
     outside: tuple[int, ...] = ()  # value: runs at least OUTSIDE_SIGMA tolerances off
+    stand_in: bool = False  # value: its move is the LTI model's alone (``_back_within``)
 
     @property
     def words(self) -> str:
@@ -423,6 +424,7 @@ def _value_series(
     movement, finding, fit = Movement.TOO_FEW, None, _no_fit()
     stands_in = _stood_in_for(name, rows, named)
     y = np.log(multipliers[mask])
+    stood_in = None if stands_in else _back_within(name, rows, sigma, named)
     if mask.sum() >= MIN_RUNS:
         fit = _fit(run_numbers[mask].astype(float), y) if mask.sum() >= TREND_RUNS else fit
         movement, finding = _judge_value(name, y, sigma, fit, stands_in)
@@ -433,6 +435,8 @@ def _value_series(
         movement = Movement.OUTSIDE
         last = float(multipliers[run_numbers == outside[-1]][0])
         finding = _outside(name, outside, last, sigma, stands_in)
+    if finding is not None and stood_in is not None:
+        finding = f"{finding.rsplit(': ', 1)[0]}: {stood_in}"
     return Series(
         name=name,
         kind="value",
@@ -449,6 +453,7 @@ def _value_series(
         movement=movement,
         finding=finding,
         outside=outside,
+        stand_in=finding is not None and stood_in is not None,
     )
 
 
@@ -468,6 +473,36 @@ def _outside(
         f"run {runs[-1] + 1}: {advice.words} at {multiplier:.2g} of the rig file's value, "
         f"outside its tolerance ±{100 * sigma:.0f} % ({times:.1f} times it{also}): "
         f"{advice.cause}"
+    )
+
+
+def _back_within(
+    name: str, rows: Sequence[DiagnosisRow], sigma: float, named: Mapping[str, int] | None
+) -> str | None:
+    """Why a value's move is the LTI model's alone, in words, or None.
+
+    The calibrated LTI model may move a value to stand in for the physics it lacks beyond
+    the catalogue's ``stands_in_for`` (the caliper's stiffness and force area lowered
+    together beside a stick-slip seal). When the improved model, with the effect named in
+    most runs modelled, holds the value within its tolerance in most runs, its move is that
+    stand-in, not the rig's.
+    """
+    common = max((named or {}).items(), key=lambda kv: kv[1], default=(None, 0))
+    effect, count = common
+    if effect is None or count <= len(rows) / 2:
+        return None
+    improved = [
+        v.improved_multiplier
+        for row in rows
+        for v in row.calibration
+        if v.name == name and v.improved_multiplier is not None
+    ]
+    within = sum(abs(math.log(m)) <= sigma for m in improved if m > 0.0)
+    if not improved or within <= len(improved) / 2:
+        return None
+    return (
+        f"within its tolerance in {within} of {len(improved)} runs once the "
+        f"{_advice(effect).words} is modelled: the LTI model's stand-in for it, not the rig"
     )
 
 

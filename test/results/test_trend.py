@@ -264,3 +264,35 @@ def test_an_air_finding_says_which_air_as_the_verdict_said_it() -> None:
         air = next(s for s in rig_trend(told).series if s.name == "air_fraction").finding
         assert air is not None and air.startswith("fluid air fraction rose")
         assert air.endswith(ending) and "bleed the circuit" not in air
+
+
+def test_a_drift_of_the_lti_model_alone_is_said_as_its_stand_in() -> None:
+    """The LTI-only calibration lowers the caliper stiffness run after run beside a stick-slip
+    seal (a stand-in the catalogue does not list), while the improved model holds it at the
+    rig file's: the line says so, and names no rig fault. Without improved values the same
+    series is a drift of the rig."""
+    fleet = steady_fleet(_rng(7), 30)
+    for number, run in enumerate(fleet):
+        run.logs["caliper_stiffness"] = math.log(1.0 - 0.34 * number / 29)
+        run.identified["caliper_stiffness"] = True
+        run.named = ["seal_stick_slip"]
+    plain = rows(fleet)
+    modelled = [
+        replace(
+            row,
+            calibration=tuple(
+                replace(v, improved_multiplier=1.01) if v.name == "caliper_stiffness" else v
+                for v in row.calibration
+            ),
+        )
+        for row in plain
+    ]
+    [drift] = [s for s in rig_trend(plain).series if s.name == "caliper_stiffness"]
+    assert drift.finding and drift.finding.endswith("check the caliper mounting")
+    assert not drift.stand_in
+    [stand_in] = [s for s in rig_trend(modelled).series if s.name == "caliper_stiffness"]
+    assert stand_in.stand_in and stand_in.finding
+    assert stand_in.finding.endswith(
+        "within its tolerance in 30 of 30 runs once the seal stick-slip is modelled: the LTI "
+        "model's stand-in for it, not the rig"
+    )
