@@ -17,12 +17,11 @@ from brake_hil.results.trend import (
     SIGNIFICANCE,
     TREND_RUNS,
     Movement,
-    _fit,
-    _trend_p_value,
     identified,
     rig_trend,
     trends,
 )
+from brake_hil.results.trend_statistics import _fit, _trend_p_value
 from test.results.fleets import Run, real_document, rows, steady_fleet, wearing_fleet
 
 
