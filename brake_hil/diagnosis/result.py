@@ -161,7 +161,8 @@ class Diagnosis:
         if doubt is None:
             return {}
         name = self.effects[0]
-        partner = None if name in self.summary.not_alone else self.summary.hidden_partner(name)
+        alone = len(self.effects) == 1 and name not in self.summary.not_alone
+        partner = self.summary.hidden_partner(name) if alone else None
         second = (
             {"possible_second_effect": partner[0]}
             if partner is not None and partner[0] is not None

@@ -53,7 +53,7 @@ class Summary:
     baseline_channel_nrmse: dict[str, float] = field(default_factory=dict)  # held-out
     pairs_ruled_out: tuple[tuple[str, ...], ...] = ()  # can never be named (unnameable_pairs)
     stand_ins: dict[str, str] = field(default_factory=dict)  # "a+b": the physics check failed
-    not_alone: dict[str, str] = field(default_factory=dict)  # single: Candidate.not_alone
+    not_alone: dict[str, str] = field(default_factory=dict)  # "a" or "a+b": Candidate.not_alone
     # single: the even harmonics of p_b its fit leaves, share (%), z, power (unmade_signature)
     even_left: dict[str, tuple[float, float, float]] = field(default_factory=dict)
     form_gain: float = 1.0  # the best generic form's held-out improvement (residual_forms)
@@ -71,7 +71,7 @@ class Summary:
         return max((g for key, g in self.form_gains.items() if key not in kin), default=1.0)
 
     def doubt(self, effects: tuple[str, ...]) -> str | None:
-        """Why ``effects``, a single, may not be alone; else None.
+        """Why ``effects`` may not be alone (a pair: a member's values, :attr:`not_alone`).
 
         Its own fitted values show another physics beside it (:attr:`not_alone`), a pair
         with it has the larger posterior while it leaves more than ``NOISE_EXCESS`` times the
@@ -79,10 +79,10 @@ class Summary:
         cannot make (:meth:`unmade`). A second effect the pair identifies is said before the
         signature's doubt, which names none.
         """
+        if "+".join(effects) in self.not_alone:
+            return self.not_alone["+".join(effects)]
         if len(effects) != 1:
             return None
-        if effects[0] in self.not_alone:
-            return self.not_alone[effects[0]]
         partner = self.hidden_partner(effects[0])
         unmade = self.unmade(effects[0])
         if unmade is not None and (partner is None or partner[0] is None):
@@ -261,7 +261,11 @@ def summarise(
         pairs=tuple(hypothesis(h) for h in pairs),
         baseline_channel_nrmse=dict(baseline.held_out_nrmse),
         pairs_ruled_out=tuple(sorted(pairs_ruled_out)),
-        not_alone={h.effects[0]: why for h in singles if (why := not_alone(h)) is not None},
+        not_alone={
+            "+".join(h.effects): why
+            for h in (*singles, *pairs)
+            if (why := not_alone(h)) is not None
+        },
         even_left=dict(even_left or {}),
         form_gain=max((form_gains or {}).values(), default=1.0),
         form_gains=dict(form_gains or {}),
@@ -307,8 +311,15 @@ def unmade_signature(name: str, left: tuple[float, float, float], noise_cost: fl
 
 
 def not_alone(fit: Fit) -> str | None:
-    """Why a single's fitted values say it is likely not alone (Candidate.not_alone)."""
-    if len(fit.effects) != 1:
-        return None
-    member, own = next(own_columns([candidate(fit.effects[0])], fit.theta))
-    return member.not_alone(own)
+    """Why a hypothesis's fitted values say it is likely not all (Candidate.not_alone).
+
+    A single's own values; in a pair, either member's (a delay whose skew and common lag are
+    two timing errors beside an orifice is the orifice's lag read as a delay, or a third
+    effect), said with the member's name.
+    """
+    members = [candidate(name) for name in fit.effects]
+    for member, own in own_columns(members, fit.theta):
+        why = member.not_alone(own)
+        if why is not None:
+            return why if len(members) == 1 else f"{member.name}: {why}"
+    return None

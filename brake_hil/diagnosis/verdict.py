@@ -379,6 +379,10 @@ def _caps(summary: Summary, standing: _Standing) -> _Caps:
     # alone, no surer than a stand-in's replacement (nothing measures how likely).
     # One that a pair with it betters (Summary.hidden_partner): the pair's log odds, the
     # more the pair cuts its leftover the less sure it is alone.
+    # A pair with a member whose own fitted values are not its physics alone (a delay's
+    # skew beside a common lag): as a single's, capped in words.
+    if chosen is not None and len(chosen.effects) > 1 and summary.doubt(chosen.effects):
+        fixed.append((STAND_IN_MARGIN, NOT_ALONE))
     if chosen is not None and len(chosen.effects) == 1:
         name = chosen.effects[0]
         partner = summary.hidden_partner(name)

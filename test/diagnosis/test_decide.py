@@ -242,6 +242,25 @@ def test_a_single_not_alone_by_its_own_values_is_named_but_unsure() -> None:
     assert decide(other).effects == ("orifice_flow",) and decide(other).confidence > 0.9
 
 
+def test_a_pair_whose_member_is_not_its_physics_alone_is_named_but_unsure() -> None:
+    """Air with a delay whose fitted values are a skew of one channel beside a common lead of
+    the others (two timing errors: the air's lag read as a delay) is still named, no surer
+    than the cap, and says why; the same pair without that doubt is sure."""
+    a, b = single("entrained_air", BASE / 10), single("sensor_delay", BASE / 1.2)
+    both = pair("entrained_air", "sensor_delay", BASE / 400)
+    sure = decide(summary(a, b, both))
+    assert set(sure.effects) == {"entrained_air", "sensor_delay"} and sure.confidence > 0.9
+    why = "sensor_delay: its delays are a skew of F_k (-1.10 ms) and a common lead"
+    doubted = dataclasses.replace(
+        summary(a, b, both), not_alone={"entrained_air+sensor_delay": why}
+    )
+    verdict = decide(doubted)
+    assert set(verdict.effects) == {"entrained_air", "sensor_delay"}
+    assert verdict.capped == rules.NOT_ALONE
+    assert verdict.confidence <= diagnosis._confidence(diagnosis.STAND_IN_MARGIN) + 1e-12
+    assert doubted.doubt(("entrained_air", "sensor_delay")) == why
+
+
 def test_pairs_that_can_never_be_named_leave_the_verdict_and_the_fitted_ones_weigh() -> None:
     """A pair whose better single leaves under PAIR_SHARE is ruled out, not fitted; the
     verdict is the same whatever that pair's fit, and the more a fitted one cuts what the
@@ -441,3 +460,21 @@ def test_unfitted_pairs_are_fitted_as_rivals_or_partners_of_the_verdict() -> Non
         assert decide(fitted).effects == ("eccentric_load",)
         assert decide(fitted).confidence <= decide(unfitted).confidence + 1e-12
     assert decide(fitted).confidence <= diagnosis._confidence(diagnosis.STAND_IN_MARGIN) + 1e-12
+
+
+def test_a_pairs_member_values_are_read_as_a_singles() -> None:
+    """``summary.not_alone`` of a pair: the delay's skew beside a common lead, with its name;
+    a delay of one channel alone beside air is no doubt."""
+    from brake_hil.diagnosis.fitting import Fit
+    from brake_hil.diagnosis.summary import not_alone
+
+    names = ("air_share", "delay_p_b", "delay_F_k", "delay_x_c", "calibration.caliper_stiffness")
+
+    def fitted(*delays: float) -> Fit:
+        theta = np.array([0.5, *delays, 1.0])
+        effects = ("entrained_air", "sensor_delay")
+        return Fit(effects, theta, names, ("-",) * 5, 1e-6, 1e-6, {})
+
+    why = not_alone(fitted(-1.97e-3, -3.46e-3, -2.76e-3))
+    assert why is not None and why.startswith("sensor_delay: its delays are a skew of p_b")
+    assert not_alone(fitted(0.0, 0.0, 3.0e-3)) is None
