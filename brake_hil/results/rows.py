@@ -4,6 +4,9 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
+import re
+
+from brake_hil.diagnosis.verdict import confidence_text
 
 __all__ = [
     "CalibrationValue",
@@ -60,6 +63,16 @@ class DiagnosisRow:
     calibration: tuple[CalibrationValue, ...]
     hypotheses: tuple[HypothesisRow, ...]
     metrics: Metrics  # model (baseline, improved) -> channel -> metric -> value
+
+    @property
+    def confidence_text(self) -> str:
+        """The confidence as the diagnosis said it: a number, or a capped one's words."""
+        capped = _CAPPED.search(self.explanation)
+        return confidence_text(self.confidence, capped.group(1) if capped else None)
+
+
+_CAPPED = re.compile(r"How sure: likely, (.+?); the confidence is that rule's cap")
+"""A capped confidence in a stored explanation (:func:`.diagnosis.result.explain`'s words)."""
 
 
 @dataclass(frozen=True)

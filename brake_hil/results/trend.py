@@ -47,17 +47,17 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
-from enum import StrEnum
 import math
-from typing import Final, NamedTuple
+from typing import Final
 
 import numpy as np
 
 from brake_hil.diagnosis.physics_checks import IDENTIFIABLE_SHARE
 from brake_hil.diagnosis.rig_findings import AIR_VALUES, air_in_words
-from brake_hil.physics.calibrated_values import VALUE_LABELS
-from brake_hil.physics.catalogue import CATALOGUE, stand_ins
+from brake_hil.physics.catalogue import stand_ins
 from brake_hil.results.store import DiagnosisRow
+from brake_hil.results.trend_series import ADVICE, Advice, Movement, Series
+from brake_hil.results.trend_series import advice as _advice
 from brake_hil.results.trend_statistics import (
     CONFIDENCE,
     SIGNIFICANCE,
@@ -107,39 +107,6 @@ once, whatever the number of runs (the diagnosis report's ``FLAG_SIGMA``: the ri
 is then itself a finding). Its false-alarm rate on steady fleets is in docs/benchmarks.md."""
 
 
-class Advice(NamedTuple):
-    """How a value or effect is said, and what its move points to on the rig."""
-
-    words: str  # e.g. "caliper stiffness"
-    cause: str  # e.g. "check the caliper mounting"
-
-
-_NO_CAUSE = "see the diagnosis report of the last run"
-"""What an effect whose catalogue entry names no cause points to."""
-
-
-class _Advice(Mapping[str, Advice]):
-    """Every calibrated value's and library effect's advice, as the catalogue is when read.
-
-    A value's from :data:`~brake_hil.physics.calibrated_values.VALUE_LABELS`, an effect's from
-    its catalogue entry (``label``, else its title; ``cause``).
-    """
-
-    def __getitem__(self, name: str) -> Advice:
-        if name in VALUE_LABELS:
-            label = VALUE_LABELS[name]
-            return Advice(label.words, label.cause)
-        item = CATALOGUE[name]
-        return Advice(item.label or item.title, item.cause or _NO_CAUSE)
-
-    def __iter__(self) -> Iterator[str]:
-        yield from VALUE_LABELS
-        yield from (name for name in CATALOGUE if name not in VALUE_LABELS)
-
-    def __len__(self) -> int:
-        return sum(1 for _ in self)
-
-
 class _StandsInFor(Mapping[str, tuple[str, ...]]):
     """Each calibrated value and the effects standing in it, from the entries (live)."""
 
@@ -153,56 +120,9 @@ class _StandsInFor(Mapping[str, tuple[str, ...]]):
         return len(stand_ins())
 
 
-ADVICE: Final[Mapping[str, Advice]] = _Advice()
-"""Per calibrated value and effect (a test holds it to the calibration and the catalogue);
-the diagnosis report's ``RIG_CHECKS`` says in more words what to look at for an effect."""
-
 STANDS_IN_FOR: Final[Mapping[str, tuple[str, ...]]] = _StandsInFor()
 """Calibrated LTI values and the effects whose misfit the calibration puts into them (each
 entry's ``stands_in_for``, the effects in catalogue order)."""
-
-
-class Movement(StrEnum):
-    """What a series did."""
-
-    STEADY = "steady"  # no trend beyond doubt, over enough runs to test one
-    OUTSIDE = "outside"  # a run's value far outside its band, said at once
-    DRIFT = "drift"  # a value moved along a significant trend
-    OFFSET = "offset"  # a value outside its band throughout, without a drift
-    GREW = "grew"  # an effect grew and the verdicts came to name it
-    TOO_FEW = "too_few"  # fewer than TREND_RUNS usable runs: no trend test
-
-
-@dataclass(frozen=True)
-class Series:
-    """One calibrated value or one effect of a rig across its runs, and its trend."""
-
-    name: str  # calibration value or effect name
-    kind: str  # "value" or "effect"
-    runs: IntArray  # each point's run number in the rig's time order (0 = first)
-    times_ns: IntArray  # each point's recording start (ns since the epoch; -1: unknown)
-    values: FloatArray  # value: multiplier over the rig file's; effect: log10 improvement
-    used: BoolArray  # points the trend is fitted on (value: identified in that run)
-    named: BoolArray  # effect: the run's verdict names it (value: all False)
-    band: tuple[float, float] | None  # value: multiplier band (exp(-sigma), exp(sigma))
-    slope: float  # per run: of ln multiplier (value) or log10 improvement (effect); NaN
-    interval: tuple[float, float]  # CONFIDENCE interval of the slope (per run)
-    intercept: float  # of the line at run 0, in the slope's units
-    p_value: float  # Kendall's tau test of the trend (NaN when too few)
-    movement: Movement
-    finding: str | None  # the line in plain words (drift, offset, grew); None otherwise
-    outside: tuple[int, ...] = ()  # value: runs at least OUTSIDE_SIGMA tolerances off
-    stand_in: bool = False  # value: its move is the LTI model's alone (``_back_within``)
-
-    @property
-    def words(self) -> str:
-        """How the value or effect is said (:data:`ADVICE`)."""
-        return _advice(self.name).words
-
-    def line(self) -> FloatArray:
-        """The fitted trend at each used run, in the units of :attr:`values`."""
-        level = self.intercept + self.slope * self.runs[self.used].astype(float)
-        return np.exp(level) if self.kind == "value" else level
 
 
 @dataclass(frozen=True)
@@ -237,7 +157,9 @@ class RigTrend:
             lines.append(f"{_runs(runs)}: too few to test a trend; {TREND_RUNS} needed")
         elif not lines:
             lines.append(_nothing_found(self.series, runs))
-        if runs >= TREND_RUNS and (few := [s for s in self.too_few if s.kind == "value"]):
+        carried = {s.name for s in self.series if s.modelled and s.finding}
+        few = [s for s in self.too_few if s.kind == "value" and s.name not in carried]
+        if runs >= TREND_RUNS and few:
             names = ", ".join(f"{s.words} ({int(s.used.sum())})" for s in few)
             lines.append(f"identified in too few runs to test a trend: {names}")
         named = [
@@ -278,12 +200,6 @@ def identified(prior_sigma: float, posterior_sigma: float) -> bool:
     return math.isfinite(posterior_sigma) and posterior_sigma <= IDENTIFIABLE_SHARE * prior_sigma
 
 
-def _advice(name: str) -> Advice:
-    if name in VALUE_LABELS or name in CATALOGUE:
-        return ADVICE[name]
-    return Advice(name.replace("_", " "), _NO_CAUSE)
-
-
 def trends(rows: Iterable[DiagnosisRow]) -> list[RigTrend]:
     """One :class:`RigTrend` per rig name, sorted by name; rows in time order."""
     by_rig: dict[str, list[DiagnosisRow]] = {}
@@ -311,6 +227,7 @@ def rig_trend(rows: Sequence[DiagnosisRow]) -> RigTrend:
     )
     named = {e: sum(e in r.effects for r in kept) for r in kept for e in r.effects}
     series = [_value_series(name, kept, named) for name in values]
+    series += _carried_series(series, kept, named)
     series += [_effect_series(name, kept) for name in effects]
     return RigTrend(kept[0].rig_name, kept, tuple(_air_said(series, kept)), earlier, notes)
 
@@ -325,6 +242,68 @@ def _air_said(series: list[Series], rows: Sequence[DiagnosisRow]) -> list[Series
             item = replace(item, finding=f"{item.finding[: -len(cause)]}{said}")
         out.append(item)
     return out
+
+
+def _carried_series(
+    lti: Sequence[Series], rows: Sequence[DiagnosisRow], named: Mapping[str, int]
+) -> list[Series]:
+    """The air's values as the improved model holds them, each with its drift (or none).
+
+    Beside a named effect the LTI calibration rarely identifies the air fraction (the
+    effect's misfit dwarfs the air's), while the improved model, with that effect modelled,
+    refits it in every run: air collecting beside a wearing seal shows there first. Only
+    the air's values, and only where their LTI series says nothing: the other values the
+    improved model refits trade with the air (a hose wall stiffens as the air's compliance,
+    which follows the pressure, grows), so a drift of theirs is not the rig's.
+    """
+    effect, count = max(named.items(), key=lambda kv: kv[1], default=(None, 0))
+    if effect is None or count <= len(rows) / 2:
+        return []
+    found = []
+    for item in lti:
+        if item.name not in AIR_VALUES or item.finding is not None or item.band is None:
+            continue
+        runs, values = [], []
+        for index, row in enumerate(rows):
+            value = next((c for c in row.calibration if c.name == item.name), None)
+            if value is not None and (value.improved_multiplier or 0.0) > 0.0:
+                runs.append(index)
+                values.append(float(value.improved_multiplier or 1.0))
+        if len(values) < TREND_RUNS:
+            continue
+        x, y, sigma = np.array(runs, dtype=np.int64), np.log(values), -math.log(item.band[0])
+        fit = _fit(x.astype(float), y)
+        movement, finding = Movement.STEADY, None
+        if fit.significant and abs(fit.last - fit.first) >= MIN_CHANGE * sigma:
+            words = _advice(item.name)
+            movement, finding = (
+                Movement.DRIFT,
+                (
+                    f"with the {_advice(effect).words} modelled, {words.words} "
+                    f"{_moved(fit.last - fit.first)} over {len(values)} runs (tolerance "
+                    f"±{100 * sigma:.0f} %): {words.cause}"
+                ),
+            )
+        found.append(
+            replace(
+                item,
+                runs=x,
+                times_ns=_times(rows, runs),
+                values=np.exp(y),
+                used=np.ones(x.shape, dtype=bool),
+                named=np.zeros(x.shape, dtype=bool),
+                slope=fit.slope,
+                interval=fit.interval,
+                intercept=fit.intercept,
+                p_value=fit.p_value,
+                movement=movement,
+                finding=finding,
+                outside=(),
+                stand_in=False,
+                modelled=effect,
+            )
+        )
+    return found
 
 
 def _times(rows: Sequence[DiagnosisRow], runs: list[int]) -> IntArray:
