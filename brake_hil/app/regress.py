@@ -24,9 +24,9 @@ derives the model at each segment's own mean pressure, the live model at one).
 * :func:`run_regression` is the command: bags replayed over
   :func:`~brake_hil.app.parallel.parallel_map`, the baseline compared or rewritten; it
   prints nothing and returns a :class:`Regression`.
-* :func:`far_off`: a baseline that is itself far from the recording (a ptp ratio more than
-  :data:`FAR_OFF_PTP_PCT` from 100 %, the comparator's ERROR level) is flagged: a regression
-  that holds still against it only says the wrong answer has not changed.
+* :func:`far_off`: a baseline that is itself far from the recording (a ptp ratio further
+  from 100 % than the rig file's tolerances allow, :func:`rig_spread`) is flagged: a
+  regression that holds still against it only says the wrong answer has not changed.
 
 Baseline JSON: ``{"model_file": path relative to the baseline's folder (only when one model
 file was given for all), "tolerances": {metric: absolute tolerance}, "bags": {name:
@@ -40,7 +40,7 @@ checked on its ``metrics`` alone.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import partial
 import json
 import math
@@ -61,8 +61,9 @@ from brake_hil.analysis.stamp_scoring import (
     score_segments,
 )
 from brake_hil.app.parallel import ONE_PER_CORE, Outcome, Workers, parallel_map, values
-from brake_hil.app.regress_plan import Plan, plan_replays
+from brake_hil.app.regress_plan import Plan, plan_replays, rig_spread
 from brake_hil.app.regress_segments import segment_checks
+from brake_hil.diagnosis.rig_findings import FLAG_SIGMAS
 from brake_hil.errors import (
     BaselineError,
     NoSteadyPulsingError,
@@ -75,10 +76,9 @@ from brake_hil.physics.lti_model import SAMPLE_TIME
 from brake_hil.topics import OUTPUT_CHANNELS
 
 FAR_OFF_PTP_PCT: Final = Thresholds().ptp_ratio_error_pct
-"""A baseline whose ptp ratio of a channel is further than this from 100 % (percentage points)
-is itself far off: the comparator's ERROR level, where the live comparator calls the model
-wrong. A rig file's ``tolerances`` bound its values, not the ptp ratio, so the comparator's
-level is the one bound on the ratio itself."""
+"""Without the rig's own spread of the ptp ratio (no rig file, no steady pulsing), a baseline
+whose ptp ratio of a channel is further than this from 100 % (percentage points) is itself
+far off: the comparator's ERROR level, where the live comparator calls the model wrong."""
 
 # --------------------------------------------------------------------------- replay
 
@@ -97,6 +97,9 @@ class ReplayResult:
     metrics: dict[str, dict[str, float]]  # channel -> metric -> value
     basis: str = "steady_cycles"  # or non_idle_segments: a recording without steady pulsing
     scored_segments: list[dict[str, Any]] = field(default_factory=list)  # every segment's
+    # channel -> one-sigma spread (percentage points) of the ptp ratio the rig file's
+    # tolerances allow (:func:`~brake_hil.diagnosis.ptp_spread.ptp_spread`); empty: unknown
+    ptp_spread: dict[str, float] = field(default_factory=dict)
 
     @property
     def replay_factor(self) -> float:
@@ -115,6 +118,7 @@ class ReplayResult:
             "metrics": {channel: dict(values) for channel, values in self.metrics.items()},
             "basis": self.basis,
             **({"segment_metrics": self.scored_segments} if self.scored_segments else {}),
+            **({"ptp_spread_pct": dict(self.ptp_spread)} if self.ptp_spread else {}),
         }
 
 
@@ -217,8 +221,13 @@ def replay_file(
     reader: Callable[[Path], Recording],
     mean_pressure: float | None = None,
 ) -> ReplayResult:
-    """:func:`replay_recording` of the file ``path`` read by ``reader`` (for process pools)."""
-    return replay_recording(reader(path), model_file, mean_pressure)
+    """:func:`replay_recording` of the file ``path`` read by ``reader`` (for process pools).
+
+    With the ptp spread its rig file's tolerances allow (:func:`.regress_plan.rig_spread`).
+    """
+    recording = reader(path)
+    result = replay_recording(recording, model_file, mean_pressure)
+    return replace(result, ptp_spread=rig_spread(recording, path, model_file))
 
 
 def replay_job(job: tuple[Path, Path], reader: Callable[[Path], Recording]) -> ReplayResult:
@@ -226,16 +235,23 @@ def replay_job(job: tuple[Path, Path], reader: Callable[[Path], Recording]) -> R
     return replay_file(job[0], job[1], reader)
 
 
-def far_off(metrics: Mapping[str, Mapping[str, float]]) -> list[str]:
-    """``"F_k ptp 180.8 %"`` for each channel whose ptp ratio is far from 100 %.
+def far_off(
+    metrics: Mapping[str, Mapping[str, float]], spread: Mapping[str, float] | None = None
+) -> list[str]:
+    """``"F_k ptp 180.8 % (100 ± 30 % allowed)"`` for each channel far from 100 %, or not a number.
 
-    Far: more than :data:`FAR_OFF_PTP_PCT` away, or not a number.
+    Far: further than :data:`FLAG_SIGMAS` times the ``spread`` the rig file's tolerances allow
+    (:func:`rig_spread`), the diagnosis's bar for a value outside its tolerance; without a
+    spread, further than :data:`FAR_OFF_PTP_PCT`.
     """
     found = []
     for channel in OUTPUT_CHANNELS:
         ratio = float(metrics.get(channel, {}).get("ptp_ratio_pct", math.nan))
-        if not math.isfinite(ratio) or abs(ratio - 100.0) > FAR_OFF_PTP_PCT:
-            found.append(f"{channel} ptp {ratio:.1f} %")
+        allowed = FAR_OFF_PTP_PCT
+        if spread and channel in spread:
+            allowed = FLAG_SIGMAS * spread[channel]
+        if not math.isfinite(ratio) or abs(ratio - 100.0) > allowed:
+            found.append(f"{channel} ptp {ratio:.1f} % (100 ± {allowed:.0f} % allowed)")
     return found
 
 
@@ -412,6 +428,8 @@ class Regression:
     refused: dict[str, str] = field(default_factory=dict)  # path -> why it was not replayed
     sources: dict[str, str] = field(default_factory=dict)  # bag key -> where its model came from
     far_off: dict[str, list[str]] = field(default_factory=dict)  # bag key -> far-off channels
+    # bag key -> the model file the far-off metrics were measured with (the stored baseline's)
+    far_off_models: dict[str, str] = field(default_factory=dict)
 
     @property
     def data_s(self) -> float:
@@ -485,7 +503,11 @@ def _far_off_baselines(
         metrics = {key: result.metrics for key, result in results.items()}
     else:
         metrics = {key: held[key]["metrics"] for key in results if key in held}
-    return {key: found for key, value in metrics.items() if (found := far_off(value))}
+    return {
+        key: found
+        for key, value in metrics.items()
+        if (found := far_off(value, results[key].ptp_spread))
+    }
 
 
 def run_regression(
@@ -551,6 +573,12 @@ def run_regression(
     if update:
         _write_baseline(baseline_path, results, previous, model_file or stored)
     flagged = _far_off_baselines(results, None if update else held)
+    measured_with = {
+        key: str(results[key].model_file)
+        if update or "model_file" not in held.get(key, {})
+        else os.path.normpath(baseline_path.parent / str(held[key]["model_file"]))
+        for key in flagged
+    }
     sources = {key: plan.sources[bag] for key, (bag, _) in zip(keys, plan.jobs)}
     one_model = model_file or stored
     return Regression(
@@ -565,4 +593,5 @@ def run_regression(
         plan.refused,
         sources,
         flagged,
+        measured_with,
     )

@@ -1,7 +1,8 @@
 """Which recordings ``brake-hil regress`` replays, each through which model file.
 
 :func:`plan_replays`: ``--model`` for all, else the baseline's model file when it names
-one, else each recording's own rig file (``RECORDING.rig.yaml`` beside it).
+one, else each recording's own rig file (``RECORDING.rig.yaml`` beside it);
+:func:`rig_spread`: how far from 100 % the recording's rig lets a ptp ratio sit.
 """
 
 from __future__ import annotations
@@ -10,10 +11,13 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import NamedTuple
 
+from brake_hil.analysis.recording import Recording
 from brake_hil.app.recordings import find_recordings, rig_beside
+from brake_hil.diagnosis.ptp_spread import ptp_spread
 from brake_hil.errors import BrakeHilError, RecordingError
+from brake_hil.physics.rig import load_rig
 
-__all__ = ["Plan", "plan_replays"]
+__all__ = ["Plan", "plan_replays", "rig_spread"]
 
 
 class Plan(NamedTuple):
@@ -65,3 +69,19 @@ def plan_replays(
             jobs.append((recording, model))
             sources[recording] = source
     return Plan(jobs, sources, refused)
+
+
+def rig_spread(recording: Recording, path: Path, model_file: Path) -> dict[str, float]:
+    """The ptp spread (:func:`.ptp_spread.ptp_spread`) of the rig the recording was made on.
+
+    Its rig: the model file when it is a rig file, else the rig file beside the recording.
+    Empty when neither, or without steady pulsing (``far_off`` then takes the comparator's
+    level).
+    """
+    try:
+        rig_path = Path(model_file)
+        if rig_path.suffix not in (".yaml", ".yml"):
+            rig_path = rig_beside(path)
+        return ptp_spread(recording, load_rig(rig_path))
+    except BrakeHilError:
+        return {}

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 import json
 from pathlib import Path
 
@@ -27,8 +28,12 @@ from brake_hil.app.regress import (
     plan_replays,
     replay_recording,
 )
+from brake_hil.diagnosis.calibration import UNCERTAIN
+from brake_hil.diagnosis.ptp_spread import ptp_spread
+from brake_hil.diagnosis.rig_findings import FLAG_SIGMAS
 from brake_hil.errors import BaselineError, RecordingError
 from brake_hil.io.recording_reader import read_recording
+from brake_hil.physics.rig import load_rig
 from test.conftest import CONFIG, PROJECT
 
 BAG = PROJECT / "bags" / "one_washer_lti"
@@ -142,19 +147,42 @@ def test_the_shipped_baseline_matches_the_bundled_bag() -> None:
     assert [c for c in checks if c.status != "ok"] == []
 
 
-def test_far_off_is_a_ptp_ratio_past_the_comparators_error_level() -> None:
-    assert FAR_OFF_PTP_PCT == Thresholds().ptp_ratio_error_pct == 25.0
+def test_far_off_is_a_ptp_ratio_past_twice_what_the_rig_files_tolerances_allow() -> None:
     metrics = {
         "p_b": {"ptp_ratio_pct": 124.9},
         "F_k": {"ptp_ratio_pct": 180.79},
         "x_c": {"ptp_ratio_pct": float("nan")},
     }
-    assert far_off(metrics) == ["F_k ptp 180.8 %", "x_c ptp nan %"]
-    assert far_off({c: {"ptp_ratio_pct": 74.0} for c in ("p_b", "F_k", "x_c")}) == [
-        "p_b ptp 74.0 %",
-        "F_k ptp 74.0 %",
-        "x_c ptp 74.0 %",
+    spread = {"p_b": 3.0, "F_k": 41.0, "x_c": 29.0}
+    assert FLAG_SIGMAS == 2.0
+    assert far_off(metrics, spread) == [
+        "p_b ptp 124.9 % (100 ± 6 % allowed)",
+        "x_c ptp nan % (100 ± 58 % allowed)",
     ]
+    # without the rig's spread (no rig file, no steady pulsing): the comparator's ERROR level
+    assert FAR_OFF_PTP_PCT == Thresholds().ptp_ratio_error_pct == 25.0
+    assert far_off(metrics) == [
+        "F_k ptp 180.8 % (100 ± 25 % allowed)",
+        "x_c ptp nan % (100 ± 25 % allowed)",
+    ]
+
+
+def test_the_ptp_spread_is_the_rig_files_tolerances_pushed_through_the_model() -> None:
+    """A restricted valve sets the caliper's amplitude, so its ±40 % widens the F_k ptp's
+    spread well past the open rig's; a rig file that says every value is known exactly
+    (tolerance 0) allows none."""
+    spreads = {}
+    for name in ("one_washer_open", "one_washer_restricted"):
+        bag = PROJECT / "bags" / name
+        spreads[name] = ptp_spread(
+            read_recording(bag), load_rig(bag.with_name(name + ".rig.yaml"))
+        )
+    open_valve, restricted = spreads["one_washer_open"], spreads["one_washer_restricted"]
+    assert all(value > 1.0 for value in (*open_valve.values(), *restricted.values()))
+    assert restricted["F_k"] > 2.0 * open_valve["F_k"]
+    exact = load_rig(RIG)
+    exact = replace(exact, tolerances={u.tolerance_key: 0.0 for u in UNCERTAIN})
+    assert ptp_spread(read_recording(BAG), exact) == {"p_b": 0.0, "F_k": 0.0, "x_c": 0.0}
 
 
 def test_plan_replays_each_recording_through_its_own_rig_unless_told(tmp_path: Path) -> None:

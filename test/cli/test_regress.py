@@ -201,12 +201,12 @@ def test_every_bag_folder_replayed_through_its_own_rig_and_far_off_flagged(
     assert bags / "truth" in folders  # rig files only: skipped, never the end of the run
     baseline = tmp_path / "new" / "base.json"  # a new file in a new folder
     created = regress(*folders, "--baseline", baseline, "--update")
-    # Written, exit 0, one warning: one_washer_restricted is itself far off its own rig's LTI
-    # model (its seals stick and slip; F_k ptp about 130 %, past the comparator's ERROR level).
+    # Written, exit 0, no warning: each bag through its own rig file sits within what that
+    # rig file's tolerances allow (the restricted ones' F_k ptp of 123-130 % too: their valve
+    # is known to ±40 % and sets the caliper's amplitude).
     assert created.returncode == 0, created.stdout + created.stderr
     assert baseline.is_file()
-    warned = [line for line in created.stdout.splitlines() if line.startswith("WARNING: ")]
-    assert len(warned) == 1 and "one_washer_restricted is itself far off: F_k ptp" in warned[0]
+    assert "WARNING" not in created.stdout + created.stderr
     skipped = [line for line in created.stderr.splitlines() if "skipped" in line]
     assert skipped == [
         f"brake-hil regress: {bags / 'truth'}: no recording in this folder: skipped"
@@ -222,14 +222,14 @@ def test_every_bag_folder_replayed_through_its_own_rig_and_far_off_flagged(
     again = regress(*folders, "--baseline", baseline)
     assert again.returncode == 0, again.stdout + again.stderr
     assert "every metric within its tolerance" in again.stdout
-    assert "note: baseline for one_washer_restricted is itself far off" in again.stdout.replace(
-        f"{bags}/", ""
-    )
+    assert "far off" not in again.stdout
     stored = {Path(k).name: v for k, v in json.loads(baseline.read_text())["bags"].items()}
     # through the open-valve rig these read 180.8 % and 183.2 %; through their own, within
-    # the comparator's ERROR level (25 %) of 100 % or just past it
-    assert abs(stored["five_washer_restricted"]["metrics"]["F_k"]["ptp_ratio_pct"] - 100) < 25
-    assert abs(stored["one_washer_restricted"]["metrics"]["F_k"]["ptp_ratio_pct"] - 100) < 35
+    # twice the spread their rig file's tolerances allow (FLAG_SIGMAS)
+    for name in ("one_washer_restricted", "five_washer_restricted"):
+        ratio = stored[name]["metrics"]["F_k"]["ptp_ratio_pct"]
+        spread = stored[name]["ptp_spread_pct"]["F_k"]
+        assert 115 < ratio < 135 and abs(ratio - 100) < 2 * spread, (name, ratio, spread)
 
 
 def test_a_baseline_through_the_wrong_rig_is_written_and_flagged(tmp_path: Path) -> None:
@@ -241,7 +241,10 @@ def test_a_baseline_through_the_wrong_rig_is_written_and_flagged(tmp_path: Path)
     assert done.returncode == 0, done.stdout + done.stderr
     assert baseline.is_file()
     assert "WARNING: " in done.stderr and "one_washer_restricted is itself far off" in done.stderr
-    assert "is itself far off: p_b ptp 148.2 %, F_k ptp 180.8 %, x_c ptp 156.9 %" in done.stdout
+    assert (
+        "is itself far off: p_b ptp 148.2 % (100 ± 9 % allowed), F_k ptp 180.8 % (100 ± 51 % "
+        "allowed), further than the rig file's tolerances allow" in done.stdout
+    )
     assert f"the model {CONFIG / 'rig_default.yaml'} does not match this recording" in done.stdout
     document = json.loads(baseline.read_text())
     assert document["model_file"] == (CONFIG / "rig_default.yaml").as_posix()
