@@ -198,7 +198,7 @@ def test_a_tenth_effect_runs_through_the_virtual_rig_and_the_diagnosis(
 ) -> None:
     assert [c.name for c in CANDIDATES][-1] == "bore_sensor_offset"
     result = _diagnosed_offset([parse_effect("bore_sensor_offset=1.0")], default_rig)
-    baseline, improved = result.baseline.held_out_nrmse, result.improved.held_out_nrmse
+    baseline, improved = result.baseline.held_out_rms, result.improved.held_out_rms
     assert baseline["p_b"] > 5 * improved["p_b"], (baseline, improved)
     assert result.confidence > 0.5
     hypotheses = result.as_dict()["hypotheses"]

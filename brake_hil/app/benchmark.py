@@ -17,7 +17,7 @@ the verdicts, and only then opens the labels to score them:
   the labelled key (a verdict without ``rig_values`` has not found it);
 * ``more_air`` recall: ``verdict.air.state`` is ``more_than_rig_file``; and the same said of
   a null with the rig file's own air (a false alarm);
-* held-out NRMSE improvement on the mismatched channel (baseline / improved, the channel
+* held-out RMS improvement on the mismatched channel (baseline / improved, the channel
   with the worst baseline NRMSE) on correctly diagnosed cases;
 * seconds per recording, and the confidence's reliability table (per bin of 0.1 from 0.5:
   count, mean confidence, share right), with the count and share of *sure* verdicts
@@ -78,8 +78,8 @@ class CaseResult:
     effects: tuple[str, ...]
     confidence: float
     seconds: float
-    baseline_nrmse: dict[str, float]
-    improved_nrmse: dict[str, float]
+    baseline_rms: dict[str, float]
+    improved_rms: dict[str, float]
     error: str = ""
     improvements: dict[str, float] = field(default_factory=dict)  # hypothesis -> ratio
     summary: dict[str, object] = field(default_factory=dict)  # the decision's inputs
@@ -115,8 +115,8 @@ def diagnose_case(case_dir: Path, keep: Path | None = None) -> CaseResult:
         effects=result.effects,
         confidence=result.confidence,
         seconds=time.perf_counter() - began,
-        baseline_nrmse=result.baseline.held_out_nrmse,
-        improved_nrmse=result.improved.held_out_nrmse,
+        baseline_rms=result.baseline.held_out_rms,
+        improved_rms=result.improved.held_out_rms,
         improvements={
             "+".join(h.effects): result.baseline.held_out_cost / max(h.held_out_cost, 1e-15)
             for h in result.hypotheses
@@ -297,10 +297,10 @@ def family_figures(items: Sequence[Scored]) -> dict[str, object]:
     by_air = {air: [(r, lab) for r, lab in nulls if lab.get("air") == air] for air in NULL_AIRS}
     improvements = []
     for result, label in singles + pairs:
-        if is_right(result, label) and result.improved_nrmse:
-            worst = max(result.baseline_nrmse, key=lambda k: result.baseline_nrmse[k])
+        if is_right(result, label) and result.improved_rms:
+            worst = max(result.baseline_rms, key=lambda k: result.baseline_rms[k])
             improvements.append(
-                result.baseline_nrmse[worst] / max(result.improved_nrmse[worst], 1e-12)
+                result.baseline_rms[worst] / max(result.improved_rms[worst], 1e-12)
             )
     sure = [(r, lab) for r, lab in items if r.confidence >= SURE and not r.error]
     wrong_sure = [r.case for r, lab in sure if not is_right(r, lab)]
@@ -330,10 +330,10 @@ def family_figures(items: Sequence[Scored]) -> dict[str, object]:
         "more_air_false_alarm_rate_rig_file_nulls": _share(
             by_air["rig_file"], lambda r, lab: _air_state(r) == MORE_AIR
         ),
-        "held_out_nrmse_improvement_median": (
+        "held_out_rms_improvement_median": (
             statistics.median(improvements) if improvements else float("nan")
         ),
-        "held_out_nrmse_improvement_at_least_3x": (
+        "held_out_rms_improvement_at_least_3x": (
             sum(i >= 3.0 for i in improvements) / len(improvements)
             if improvements
             else float("nan")

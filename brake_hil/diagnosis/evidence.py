@@ -21,8 +21,8 @@ from brake_hil.diagnosis.segment_evidence import SegmentSignals
 from brake_hil.topics import OUTPUT_CHANNELS
 from brake_hil.types import FloatArray
 
-MISMATCH_NRMSE = 0.01
-"""A channel whose baseline NRMSE exceeds this (1 % of its peak-to-peak) is mismatched."""
+MISMATCH_RMS = 0.01
+"""A channel whose baseline held-out RMS exceeds this (1 % of its peak-to-peak) is mismatched."""
 PHASE_BINS = 24
 EVEN_CHUNKS = 8
 """Pieces each steady segment is cut into to measure the scatter of its even harmonics."""
@@ -126,9 +126,9 @@ class _Findings:
         }
         nrmse = {key: float(np.sqrt(np.mean(r**2))) for key, r in residuals.items()}
         for key in OUTPUT_CHANNELS:
-            values[f"nrmse_{key}"] = nrmse[key]
+            values[f"held_out_rms_{key}"] = nrmse[key]
         channels = sorted(
-            (k for k in OUTPUT_CHANNELS if nrmse[k] > MISMATCH_NRMSE), key=lambda k: -nrmse[k]
+            (k for k in OUTPUT_CHANNELS if nrmse[k] > MISMATCH_RMS), key=lambda k: -nrmse[k]
         )
         worst = max(nrmse, key=lambda k: nrmse[k])
         over = "the steady cycles" if len(self.steady) == len(parts) else "its segments"
@@ -162,7 +162,7 @@ class _Findings:
                 for k in OUTPUT_CHANNELS
             }
             per_segment.append(seg)
-            if seg[worst] > MISMATCH_NRMSE:
+            if seg[worst] > MISMATCH_RMS:
                 windows.append((part.window.start, part.window.end))
         if len(parts) > 1:
             self.findings.append(

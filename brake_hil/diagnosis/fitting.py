@@ -60,7 +60,7 @@ class Fit:
     parameter_units: tuple[str, ...]
     train_cost: float  # mean squared normalised residual, training windows
     held_out_cost: float  # the same on the held-out windows
-    held_out_nrmse: dict[str, float]  # per channel, held-out windows
+    held_out_rms: dict[str, float]  # per channel, held-out windows, over the channel's ptp
     uncertainty: FloatArray | None = None  # one sigma of theta, natural units
     window_costs: tuple[float, ...] = ()  # held_out_cost of each held-out window alone
 
@@ -240,10 +240,12 @@ class Model:
     def scores(
         self, windows: Sequence[Window], theta: FloatArray
     ) -> tuple[dict[str, float], tuple[float, ...]]:
-        """NRMSE per channel over ``windows``, and each window's cost alone.
+        """RMS per channel over ``windows``, and each window's cost alone.
 
-        A window's cost is the mean over channels of its squared NRMSE (the measure
-        ``Fit.held_out_cost`` takes over all held-out windows).
+        Each channel's RMS residual over its peak-to-peak in the whole dataset (the fits'
+        scale, not the paper's per-window NRMSE). A window's cost is the mean over channels
+        of its squared RMS (the measure ``Fit.held_out_cost`` takes over all held-out
+        windows).
         """
         scale = self.dataset.scale()
         errors: dict[str, list[FloatArray]] = {key: [] for key in OUTPUT_CHANNELS}
@@ -430,7 +432,7 @@ def _scored(model: Model, name: str, result: scipy.optimize.OptimizeResult, prio
         parameter_units=tuple(unit for _, unit, *_ in specs),
         train_cost=train_cost,
         held_out_cost=float(np.mean([v**2 for v in nrmse.values()])),
-        held_out_nrmse=nrmse,
+        held_out_rms=nrmse,
         uncertainty=uncertainty,
         window_costs=window_costs,
     )

@@ -157,7 +157,7 @@ def channel_check(baseline: Fit, hypothesis: Fit) -> CheckOutcome:
     """
     reached = {c for name in hypothesis.effects for c in entry(name).channels}
     drops = {
-        key: max(baseline.held_out_nrmse[key] ** 2 - hypothesis.held_out_nrmse[key] ** 2, 0.0)
+        key: max(baseline.held_out_rms[key] ** 2 - hypothesis.held_out_rms[key] ** 2, 0.0)
         for key in OUTPUT_CHANNELS
     }
     total = sum(drops.values())

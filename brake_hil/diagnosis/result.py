@@ -109,7 +109,7 @@ class Diagnosis:
                     "effect": "+".join(h.effects),
                     "score": round(fit_score(self.baseline, h), 4),
                     "held_out_improvement": round(fit_gain(self.baseline, h), 3),
-                    "held_out_nrmse": h.held_out_nrmse,
+                    "held_out_rms": h.held_out_rms,
                     "parameters": h.parameters(),
                     "units": dict(zip(h.parameter_names, h.parameter_units)),
                     "signature_seen": all(
@@ -252,23 +252,23 @@ def _nothing_named(
 ) -> str:
     """The words of a verdict that names no library effect (unexplained or none)."""
     # Every NRMSE in words is the paper's (Tables 4-5, per cycle), a fraction, as `compare`'s.
-    baseline_nrmse = max(m["nrmse"] for m in baseline_metrics.values())
+    worst_nrmse = max(m["nrmse"] for m in baseline_metrics.values())
     if verdict.effects:
         return (
             f"The calibrated LTI model misses the held-out cycles by up to NRMSE "
-            f"{baseline_nrmse:.4f}, {summary.excess_ratio:.0f} times the "
+            f"{worst_nrmse:.4f}, {summary.excess_ratio:.0f} times the "
             f"measurement noise's share, and no candidate explains it: the best, "
             f"{best.effects[0]}, cuts the error {fit_gain(baseline, best):.2f} times."
         )
     if summary.excess_ratio < NOISE_EXCESS:
         return (
             f"The calibrated LTI model explains the recording: NRMSE on the held-out cycles "
-            f"at most {baseline_nrmse:.4f}, {summary.excess_ratio:.1f} times the measurement "
+            f"at most {worst_nrmse:.4f}, {summary.excess_ratio:.1f} times the measurement "
             f"noise's share of the error (under {NOISE_EXCESS:g}: nothing left to name)."
         )
     return (
         f"Nothing named: the calibrated LTI model misses the held-out cycles by NRMSE at most "
-        f"{baseline_nrmse:.4f}, {summary.excess_ratio:.1f} times the measurement noise's share "
+        f"{worst_nrmse:.4f}, {summary.excess_ratio:.1f} times the measurement noise's share "
         f"of the error, but what it leaves has no shape a candidate or a generic form explains "
         f"(the best candidate, {best.effects[0]}, cuts the error only "
         f"{fit_gain(baseline, best):.2f} times); an effect weaker than that leftover would not "

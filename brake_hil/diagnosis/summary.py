@@ -33,11 +33,11 @@ class Hypothesis:
 
     effects: tuple[str, ...]
     parameters: int  # the effects' own fitted parameters
-    held_out_cost: float  # mean over channels of the squared held-out NRMSE
+    held_out_cost: float  # mean over channels of the squared held-out RMS (``baseline_rms``)
     window_costs: tuple[float, ...]  # the same per held-out window
     plausible: bool  # fitted parameters describe the physics (Candidate.plausible)
     consistent: bool  # the evidence shows its signature (Candidate.consistent)
-    channel_nrmse: dict[str, float] = field(default_factory=dict)  # held-out, per channel
+    channel_rms: dict[str, float] = field(default_factory=dict)  # held-out, per channel
 
 
 @dataclass(frozen=True)
@@ -46,11 +46,11 @@ class Summary:
 
     baseline_cost: float
     baseline_window_costs: tuple[float, ...]
-    baseline_nrmse: float  # worst channel's held-out NRMSE
+    baseline_rms: float  # worst channel's held-out RMS over its peak-to-peak (all segments)
     noise_cost: float  # the measurement noise's share of any held-out cost
     singles: tuple[Hypothesis, ...]
     pairs: tuple[Hypothesis, ...]
-    baseline_channel_nrmse: dict[str, float] = field(default_factory=dict)  # held-out
+    baseline_channel_rms: dict[str, float] = field(default_factory=dict)  # held-out
     pairs_ruled_out: tuple[tuple[str, ...], ...] = ()  # can never be named (unnameable_pairs)
     stand_ins: dict[str, str] = field(default_factory=dict)  # "a+b": the physics check failed
     not_alone: dict[str, str] = field(default_factory=dict)  # "a" or "a+b": Candidate.not_alone
@@ -195,7 +195,7 @@ class Summary:
             return tuple(
                 Hypothesis(
                     **{
-                        **item,
+                        **{_RENAMED.get(k, k): v for k, v in item.items()},
                         "effects": tuple(item["effects"]),
                         "window_costs": tuple(item["window_costs"]),
                     }
@@ -203,14 +203,16 @@ class Summary:
                 for item in items
             )
 
+        document = {_RENAMED.get(k, k): v for k, v in document.items()}
+
         return Summary(
             baseline_cost=float(document["baseline_cost"]),
             baseline_window_costs=tuple(document["baseline_window_costs"]),
-            baseline_nrmse=float(document["baseline_nrmse"]),
+            baseline_rms=float(document["baseline_rms"]),
             noise_cost=float(document["noise_cost"]),
             singles=hypotheses(document["singles"]),
             pairs=hypotheses(document["pairs"]),
-            baseline_channel_nrmse=dict(document.get("baseline_channel_nrmse", {})),
+            baseline_channel_rms=dict(document.get("baseline_channel_rms", {})),
             pairs_ruled_out=tuple(tuple(p) for p in document.get("pairs_ruled_out", ())),
             stand_ins=dict(document.get("stand_ins", {})),
             not_alone=dict(document.get("not_alone", {})),
@@ -221,6 +223,16 @@ class Summary:
             form_gain=float(document.get("form_gain", 1.0)),
             form_gains={str(k): float(v) for k, v in document.get("form_gains", {}).items()},
         )
+
+
+_RENAMED = {
+    "baseline_nrmse": "baseline_rms",
+    "baseline_channel_nrmse": "baseline_channel_rms",
+    "channel_nrmse": "channel_rms",
+}
+"""Keys of summaries stored before the held-out error's per-channel RMS got its own name (it
+is over the peak-to-peak of all the steady segments together, not the paper's NRMSE): read
+under the new names, so a stored decision replays."""
 
 
 def summarise(
@@ -249,17 +261,17 @@ def summarise(
             window_costs=h.window_costs,
             plausible=plausible(h),
             consistent=all(candidate(e).consistent(evidence.values) for e in h.effects),
-            channel_nrmse=dict(h.held_out_nrmse),
+            channel_rms=dict(h.held_out_rms),
         )
 
     return Summary(
         baseline_cost=baseline.held_out_cost,
         baseline_window_costs=baseline.window_costs,
-        baseline_nrmse=max(baseline.held_out_nrmse.values()),
+        baseline_rms=max(baseline.held_out_rms.values()),
         noise_cost=noise_cost,
         singles=tuple(hypothesis(h) for h in singles),
         pairs=tuple(hypothesis(h) for h in pairs),
-        baseline_channel_nrmse=dict(baseline.held_out_nrmse),
+        baseline_channel_rms=dict(baseline.held_out_rms),
         pairs_ruled_out=tuple(sorted(pairs_ruled_out)),
         not_alone={
             "+".join(h.effects): why

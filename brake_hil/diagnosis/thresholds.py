@@ -64,8 +64,10 @@ PARAMETER_PENALTY = 0.05
 Of two hypotheses that explain the misfit equally, the simpler is kept.
 Evidence: docs/diagnosis.md.
 """
-UNEXPLAINED_NRMSE = 0.005
-"""Held-out baseline NRMSE above which a misfit no candidate explains is 'unexplained'.
+UNEXPLAINED_RMS = 0.005
+"""Held-out RMS of the baseline above which a misfit no candidate explains is 'unexplained'.
+
+The worst channel's RMS residual over its peak-to-peak in the whole dataset.
 
 A calibrated baseline with a parameter error only misses by about 0.1 % (noise and the
 virtual rig's richer line); this is five times that. Evidence: docs/diagnosis.md.

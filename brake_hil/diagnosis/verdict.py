@@ -28,7 +28,7 @@ from brake_hil.diagnosis.thresholds import (
     PARAMETER_PENALTY,
     STAND_IN_MARGIN,
     STRUCTURED_RATIO,
-    UNEXPLAINED_NRMSE,
+    UNEXPLAINED_RMS,
     WEAK_SINGLE_LEFT,
     WEAK_SINGLE_RATIO,
     WINDOW_FLOOR,
@@ -255,7 +255,7 @@ def decide_effects(summary: Summary) -> Verdict:
     times the baseline's (a missing physics is missing everywhere; a stand-in for a
     parameter error helps one segment and hurts another), and ``FORM_RATIO`` times more than
     the best generic form of the misfit. Otherwise: ``unexplained`` when the baseline's
-    held-out NRMSE exceeds ``UNEXPLAINED_NRMSE``, a generic form cuts its error
+    held-out RMS exceeds ``UNEXPLAINED_RMS``, a generic form cuts its error
     ``STRUCTURED_RATIO`` times, or a hypothesis passed all but the generic form's bar (a
     real misfit the library does not identify), else none. While the baseline is within
     ``NOISE_EXCESS`` times the noise's share (:attr:`Summary.floor_cost`) only a weak single
@@ -487,7 +487,7 @@ def _not_named(summary: Summary, standing: _Standing, cap: _Caps) -> Verdict:
     # bar instead: their distance from it is the cap)
     best = max((log_gains[h.effects] for h in standing.eligible if h not in passing), default=0.0)
     beyond = (
-        math.log(max(summary.baseline_nrmse, 1e-12) / UNEXPLAINED_NRMSE),
+        math.log(max(summary.baseline_rms, 1e-12) / UNEXPLAINED_RMS),
         math.log(max(summary.form_gain, 1e-12) / STRUCTURED_RATIO),
         *(log_gains[h.effects] - math.log(required) for h in passing),
     )

@@ -320,8 +320,8 @@ def _evidence(diagnosis: Diagnosis) -> str:
                 f"({100 * values.get('noise_nrmse', math.nan):.3f} % of peak-to-peak)"
             )
         elif line.startswith("calibrated LTI baseline's RMS residual"):
-            shown = [k for k in OUTPUT_CHANNELS if f"nrmse_{k}" in values]
-            errors = ", ".join(f"{k} {values[f'nrmse_{k}']:.4f}" for k in shown)
+            shown = [k for k in OUTPUT_CHANNELS if f"held_out_rms_{k}" in values]
+            errors = ", ".join(f"{k} {values[f'held_out_rms_{k}']:.4f}" for k in shown)
             tail = line[line.index(";") :] if ";" in line else ""
             line = (
                 f"calibrated LTI model's RMS residual over {over}, as a fraction of "

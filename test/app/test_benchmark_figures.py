@@ -125,8 +125,8 @@ class _Fake:
 
     effects = ("entrained_air",)
     confidence = 0.8
-    baseline = SimpleNamespace(held_out_nrmse={"x_c": 0.1}, held_out_cost=1.0)
-    improved = SimpleNamespace(held_out_nrmse={"x_c": 0.05})
+    baseline = SimpleNamespace(held_out_rms={"x_c": 0.1}, held_out_cost=1.0)
+    improved = SimpleNamespace(held_out_rms={"x_c": 0.05})
     hypotheses = ()
     summary = SimpleNamespace(as_dict=lambda: {"noise": 1.0})
 

@@ -30,7 +30,7 @@ def summary(*hypotheses: Hypothesis, base: float = BASE) -> Summary:
     return Summary(
         baseline_cost=base,
         baseline_window_costs=(base,) * 3,
-        baseline_nrmse=base**0.5,
+        baseline_rms=base**0.5,
         noise_cost=base / 100,
         singles=tuple(h for h in hypotheses if len(h.effects) == 1),
         pairs=tuple(h for h in hypotheses if len(h.effects) == 2),
@@ -155,11 +155,11 @@ def test_implausible_fits_are_never_named() -> None:
 
 def test_the_summary_replays_through_json() -> None:
     orifice = dataclasses.replace(
-        single("orifice_flow", BASE / 50), channel_nrmse={"p_b": 1e-3, "F_k": 2e-4, "x_c": 3e-4}
+        single("orifice_flow", BASE / 50), channel_rms={"p_b": 1e-3, "F_k": 2e-4, "x_c": 3e-4}
     )
     original = dataclasses.replace(
         summary(orifice, pair("orifice_flow", "x", BASE / 60)),
-        baseline_channel_nrmse={"p_b": 7e-3, "F_k": 1e-3, "x_c": 2e-3},
+        baseline_channel_rms={"p_b": 7e-3, "F_k": 1e-3, "x_c": 2e-3},
     )
     again = Summary.from_dict(json.loads(json.dumps(original.as_dict())))
     assert again == original
@@ -201,7 +201,7 @@ def test_noise_floor_is_the_cycle_to_cycle_variance(excitation_hz: float) -> Non
 
 def test_a_stand_in_is_set_aside_and_the_verdict_leans_to_unexplained() -> None:
     """A hypothesis that failed a physics check is never named; what replaces it is unsure."""
-    base = 1.0e-4  # held-out NRMSE 1 %: over UNEXPLAINED_NRMSE
+    base = 1.0e-4  # held-out NRMSE 1 %: over UNEXPLAINED_RMS
     strong = single("sensor_delay", base / 20)
     clear = decide(summary(strong, base=base))
     assert clear.effects == ("sensor_delay",) and clear.confidence > 0.9
@@ -292,7 +292,7 @@ def test_pairs_that_can_never_be_named_leave_the_verdict_and_the_fitted_ones_wei
 
 
 def test_a_structured_misfit_under_the_size_threshold_is_unexplained_not_none() -> None:
-    # NRMSE 0.3 %, under UNEXPLAINED_NRMSE; no candidate helps.
+    # NRMSE 0.3 %, under UNEXPLAINED_RMS; no candidate helps.
     flat = summary(single("orifice_flow", BASE / 1.1), single("hose_compliance", BASE))
     assert decide(flat).effects == ()
     structured = dataclasses.replace(flat, form_gain=40.0)  # a leak's drift: a generic form
@@ -330,7 +330,7 @@ def test_an_effect_no_better_than_a_generic_form_is_not_identified() -> None:
     error 1.5 times, a generic form of the misfit 1.47 times. A library effect is named only
     when it beats the best generic form FORM_RATIO times; otherwise the misfit is real but
     not identified: unexplained, no surer than its distance from that bar."""
-    base = 1.0e-5  # NRMSE 0.3 %: under UNEXPLAINED_NRMSE, so only the structure says it
+    base = 1.0e-5  # NRMSE 0.3 %: under UNEXPLAINED_RMS, so only the structure says it
     clear = dataclasses.replace(summary(single("eccentric_load", base / 20)), form_gain=8.0)
     named = decide(clear)  # 20 against 8: 2.5 times the form, a real eccentric load
     assert named.effects == ("eccentric_load",) and named.confidence > 0.9

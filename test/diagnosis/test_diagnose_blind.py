@@ -68,7 +68,7 @@ def test_blind_diagnosis_names_each_effect_and_passes_the_null(case_set: Path) -
     assert figures["false_positive_rate_null"] == 0.0
     assert figures["top1_accuracy_single"] == 1.0, figures["per_case"]
     assert figures["unexplained_recall"] == 1.0, figures["per_case"]
-    assert figures["held_out_nrmse_improvement_median"] > 2.0
+    assert figures["held_out_rms_improvement_median"] > 2.0
 
 
 def test_an_unexplained_misfit_is_described_by_its_generic_form(case_set: Path) -> None:

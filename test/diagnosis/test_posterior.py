@@ -30,7 +30,7 @@ def summary(*hypotheses: Hypothesis, noise: float = BASE / 1000) -> Summary:
     return Summary(
         baseline_cost=BASE,
         baseline_window_costs=(BASE,) * 3,
-        baseline_nrmse=BASE**0.5,
+        baseline_rms=BASE**0.5,
         noise_cost=noise,
         singles=tuple(h for h in hypotheses if len(h.effects) == 1),
         pairs=tuple(h for h in hypotheses if len(h.effects) == 2),

@@ -56,7 +56,7 @@ def test_even_harmonics_are_judged_against_their_own_scatter() -> None:
 def test_the_air_signature_needs_no_fixed_one_percent() -> None:
     # the wearing rig's evidence: p_b off by 0.76 % only, its even harmonics 66 standard errors
     evidence = {
-        "nrmse_p_b": 0.0076,
+        "held_out_rms_p_b": 0.0076,
         "noise_nrmse": 1.27e-4,
         "even_harmonics_p_b": 0.0085,
         "even_harmonics_z_p_b": 66.0,
@@ -95,7 +95,7 @@ def _lab(even_left: dict[str, tuple[float, float, float]]) -> Summary:
     return Summary(
         baseline_cost=BASE,
         baseline_window_costs=(BASE,) * 3,
-        baseline_nrmse=BASE**0.5,
+        baseline_rms=BASE**0.5,
         noise_cost=NOISE,
         singles=(h(("seal_stick_slip",), seal, 3), h(("entrained_air",), BASE, 1)),
         pairs=(h(("seal_stick_slip", "entrained_air"), seal / 1.01, 4),),

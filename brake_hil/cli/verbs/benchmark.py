@@ -123,8 +123,8 @@ def _print_block(figures: dict[str, object]) -> None:
     for text, key, cases_key in _ROWS:
         share = _figure(figures[key], 100.0, "6.1f", " %")
         print(f"{text:40s}{share}  of {figures[cases_key]} cases")
-    improvement = _figure(figures["held_out_nrmse_improvement_median"], 1.0, "6.2f", " x")
-    print(f"{'held-out NRMSE improvement, median':40s}{improvement}")
+    improvement = _figure(figures["held_out_rms_improvement_median"], 1.0, "6.2f", " x")
+    print(f"{'held-out RMS improvement, median':40s}{improvement}")
     wrong = _figure(figures["wrong_share_of_sure_verdicts"], 100.0, "6.1f", " %")
     print(
         f"{'wrong among verdicts at >= 0.9':40s}{wrong}  "

@@ -51,4 +51,7 @@ class BoreFriction(Candidate):
 
     def consistent(self, evidence: dict[str, float]) -> bool:
         """The caliper or block channel is mispredicted."""
-        return max(evidence.get("nrmse_x_c", 0.0), evidence.get("nrmse_F_k", 0.0)) > 0.01
+        return (
+            max(evidence.get("held_out_rms_x_c", 0.0), evidence.get("held_out_rms_F_k", 0.0))
+            > 0.01
+        )

@@ -77,4 +77,4 @@ class EccentricLoad(Candidate):
 
     def consistent(self, evidence: dict[str, float]) -> bool:
         """x_c is off by more than p_b."""
-        return evidence.get("nrmse_x_c", 0.0) > 1.5 * evidence.get("nrmse_p_b", 0.0)
+        return evidence.get("held_out_rms_x_c", 0.0) > 1.5 * evidence.get("held_out_rms_p_b", 0.0)

@@ -61,7 +61,7 @@ class EntrainedAir(Candidate):
         scatter over the cycles and the noise (``evidence.even_harmonics_z``, the bars of
         :func:`.summary.unmade_signature`), not against a fixed share of the peak-to-peak (a
         little air mispredicts ``p_b`` by well under 1 %); or ``p_b`` mispredicted by over
-        1 % (``evidence.MISMATCH_NRMSE``: segments under 16 cycles, too short for 8 pieces of
+        1 % (``evidence.MISMATCH_RMS``: segments under 16 cycles, too short for 8 pieces of
         two cycles, show no scatter of their even harmonics).
         """
         noise = evidence.get("noise_nrmse", 0.0) ** 2
@@ -69,4 +69,4 @@ class EntrainedAir(Candidate):
             evidence.get("even_harmonics_z_p_b", 0.0) > SIGNIFICANT_Z
             and evidence.get("even_harmonics_power_p_b", 0.0) > NOISE_EXCESS * noise
         )
-        return even or evidence.get("nrmse_p_b", 0.0) > 0.01  # evidence.MISMATCH_NRMSE
+        return even or evidence.get("held_out_rms_p_b", 0.0) > 0.01  # evidence.MISMATCH_RMS

@@ -85,4 +85,4 @@ class HoseCompliance(Candidate):
 
     def consistent(self, evidence: dict[str, float]) -> bool:
         """The bore pressure is mispredicted."""
-        return evidence.get("nrmse_p_b", 0.0) > 0.01
+        return evidence.get("held_out_rms_p_b", 0.0) > 0.01

@@ -66,7 +66,7 @@ class ChannelMisfit:
 
     channel: str
     share: float  # of the baseline's held-out error (normalised), over channels
-    held_out_nrmse: float  # the baseline's, over the channel's peak-to-peak
+    held_out_rms: float  # the baseline's, over the channel's peak-to-peak
     static_fraction: float
     rate_fraction: float
     asymmetry: float
@@ -110,7 +110,7 @@ class ChannelMisfit:
         """Plain JSON, flags included."""
         return {
             "share": round(self.share, 4),
-            "held_out_nrmse": self.held_out_nrmse,
+            "held_out_rms": self.held_out_rms,
             "static_fraction": round(self.static_fraction, 4),
             "rate_fraction": round(self.rate_fraction, 4),
             "asymmetry": round(self.asymmetry, 4),
@@ -153,7 +153,7 @@ def characterise(
         data: the channel over every window, normalised.
         pressures: each segment's mean master-cylinder pressure (Pa).
         share: the channel's share of the baseline's held-out error.
-        nrmse: the baseline's held-out NRMSE of the channel.
+        nrmse: the baseline's held-out RMS of the channel, over its peak-to-peak.
     """
     u = data.baseline
     r = data.target - u
@@ -166,7 +166,7 @@ def characterise(
     return ChannelMisfit(
         channel=channel,
         share=share,
-        held_out_nrmse=nrmse,
+        held_out_rms=nrmse,
         static_fraction=static_fraction,
         rate_fraction=rate_fraction,
         asymmetry=_asymmetry(centred, rate, r),
