@@ -134,7 +134,7 @@ class _Findings:
         over = "the steady cycles" if len(self.steady) == len(parts) else "its segments"
         self.findings.append(
             f"calibrated LTI baseline's RMS residual over {over}, in % of the whole "
-            "recording's peak-to-peak (the fits' measure, not the seed's per-cycle NRMSE): "
+            "recording's peak-to-peak (the fits' measure, not the paper's per-window NRMSE): "
             + ", ".join(f"{k} {100 * v:.2f} %" for k, v in nrmse.items())
             + (f"; mismatched: {', '.join(channels)}" if channels else "; no channel above 1 %")
         )

@@ -235,16 +235,22 @@ def explain(
     return explanation
 
 
+def runner_up(summary: Summary, effects: tuple[str, ...]) -> tuple[str, float] | None:
+    """The hypothesis with the largest posterior share after ``effects``, in words, and it."""
+    shares = posterior(summary).shares
+    rival = max((e for e in shares if e != tuple(effects)), key=lambda e: shares[e], default=None)
+    if rival is None:
+        return None
+    return (" + ".join(rival) if rival else "none (the calibrated LTI model)"), shares[rival]
+
+
 def _how_sure(summary: Summary, verdict: Verdict) -> str:
     """The confidence in words: the verdict's posterior share and the next hypothesis's."""
-    shares = posterior(summary).shares
-    own = tuple(verdict.effects)
-    rival = max((e for e in shares if e != own), key=lambda e: shares[e], default=None)
     text = f"How sure: {verdict.confidence:.2f}, this verdict's share of the posterior"
+    rival = runner_up(summary, tuple(verdict.effects))
     if rival is None:
         return text + "."
-    name = " + ".join(rival) if rival else "none (the calibrated LTI model)"
-    return text + f"; next, {name} at {shares[rival]:.2f}."
+    return text + f"; next, {rival[0]} at {rival[1]:.2f}."
 
 
 def _nothing_named(

@@ -306,7 +306,7 @@ class RigEmulatorSettings:
     """
 
     rig_file: str = parameter("", "truth rig YAML; empty: config/rig_default.yaml")
-    simulator: str = parameter("virtual_rig", "virtual_rig (effects) or lti (the seed's model)")
+    simulator: str = parameter("virtual_rig", "virtual_rig (effects) or lti (the paper's model)")
     effects: tuple[str, ...] = parameter(
         ("",), 'virtual-rig effects, e.g. ["seal_stick_slip=0.5"]; [""]: none'
     )

@@ -127,7 +127,7 @@ CATALOGUE = _Catalogue(
                 "k_eh from characterize falls as the pressure amplitude grows; super-harmonics "
                 "grow from p_i to x_c; the loop of seal force against seal displacement is a "
                 "parallelogram with flat slipping edges; at low amplitude the rig is stiffer "
-                "than the seed's k_eh* = 0.29"
+                "than the paper's k_eh* = 0.29"
             ),
             channels=("F_k", "x_c"),
             quantities=(
@@ -293,7 +293,7 @@ CATALOGUE = _Catalogue(
                 "Multiplexed DAQs, anti-alias filters and CAN gateways delay channels by "
                 "different times."
             ),
-            source="acquisition chain (not in the seed)",
+            source="acquisition chain (not in the paper)",
             signature=(
                 "one channel's tau / T offset from the others' by delay / T, the same in every "
                 "segment and at every pressure; amplitudes agree"
@@ -314,7 +314,7 @@ OUT_OF_LIBRARY = _Catalogue(
             name="sensor_nonlinearity",
             title="a load cell whose gain grows with load",
             physics="The sensor's output is x (1 + c x): a static nonlinear map of one channel.",
-            source="measurement chain (not in the seed)",
+            source="measurement chain (not in the paper)",
             signature=(
                 "one output's amplitude ratio to the others grows with the pressure; its phase "
                 "and the other channels unchanged"

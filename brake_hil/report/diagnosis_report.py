@@ -30,6 +30,7 @@ from brake_hil.diagnosis.diagnose import (
     ratio,
 )
 from brake_hil.diagnosis.fitting import Fit
+from brake_hil.diagnosis.result import runner_up
 from brake_hil.diagnosis.rig_findings import rig_values_text
 from brake_hil.files import output_file
 from brake_hil.physics.calibrated_values import VALUE_LABELS
@@ -197,36 +198,26 @@ def nrmse_as_fraction(text: str) -> str:
     )
 
 
-def _confidence_figure(diagnosis: Diagnosis) -> str:
-    """``confidence 0.83``, or the cap's words with no number when a rule's cap set it."""
-    if diagnosis.confidence_capped is None:
-        return f"confidence {diagnosis.confidence:.2f}"
-    return f"{html.escape(diagnosis.confidence_capped)}: a rule's cap, not a measured confidence"
-
-
-def _confidence_words(
-    confidence: float, doubt: str | None = None, runner_up: str | None = None
-) -> str:
-    if confidence >= 0.9:
-        return "high"
-    if doubt is not None and confidence >= 0.5:
-        return "moderate: not sure it is alone (what to check, below)"
-    if confidence >= 0.7:
-        other = f" ({html.escape(runner_up)})" if runner_up else ""
+def _confidence_words(diagnosis: Diagnosis, doubt: str | None = None) -> str:
+    """How sure, in words: the CLI's (``likely, ...`` when a rule's cap set it), and its figure."""
+    if diagnosis.confidence_capped is not None:
         return (
-            f"moderate: check the runner-up{other}, the best hypothesis other than the "
-            "verdict, in the hypotheses table"
+            f"likely, {html.escape(diagnosis.confidence_capped)}: a rule's cap, not a measured "
+            "confidence (what to check, below)"
         )
-    return "low: treat the verdict as a hint, not a finding"
-
-
-def _runner_up(diagnosis: Diagnosis) -> str | None:
-    """The hypothesis with the largest held-out error cut that is not the verdict."""
-    chosen = _verdict(diagnosis).chosen
-    others = [h for h in diagnosis.hypotheses if h.effects != chosen]
-    if not others:
-        return None
-    return " + ".join(min(others, key=lambda h: h.held_out_cost).effects)
+    figure = f"confidence {diagnosis.confidence:.2f}"
+    if diagnosis.confidence >= 0.9:
+        return f"high ({figure})"
+    if doubt is not None and diagnosis.confidence >= 0.5:
+        return f"moderate, not sure it is alone ({figure}; what to check, below)"
+    rival = runner_up(diagnosis.summary, tuple(diagnosis.effects))
+    if diagnosis.confidence >= 0.7:
+        other = f"{html.escape(rival[0])}, at {rival[1]:.2f}, " if rival else ""
+        return (
+            f"moderate ({figure}): check the runner-up, {other}the next hypothesis by its "
+            "share of the posterior, in the hypotheses table"
+        )
+    return f"low ({figure}): treat the verdict as a hint, not a finding"
 
 
 def _nrmse(value: float) -> str:
@@ -271,11 +262,7 @@ def _summary(diagnosis: Diagnosis, findings: list[Finding]) -> str:
             f"{_nrmse(before[worst]['nrmse'])})."
         )
     doubt = diagnosis.summary.doubt(tuple(effects)) if effects else None
-    items.append(
-        f"<b>How sure:</b> "
-        f"{_confidence_words(diagnosis.confidence, doubt, _runner_up(diagnosis))} "
-        f"({_confidence_figure(diagnosis)})."
-    )
+    items.append(f"<b>How sure:</b> {_confidence_words(diagnosis, doubt)}.")
     checks = _rig_checks(diagnosis, findings)
     if checks:
         listed = "".join(f"<li>{c}</li>" for c in checks)

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 from brake_hil.analysis.stamp_scoring import DEFAULT_TOLERANCES, METRIC_KEYS
 from brake_hil.results.rows import MetricsRun
+from brake_hil.words import counted
 
 __all__ = ["Reference", "RecordingTrend", "metrics_trends"]
 
@@ -75,7 +76,9 @@ class RecordingTrend:
                 f" ({runs} run{'s' if runs > 1 else ''} beyond it)"
             )
         if not lines:
-            lines.append(f"every metric within its tolerance of {against} over {count} runs")
+            lines.append(
+                f"every metric within its tolerance of {against} over {counted(count, 'run')}"
+            )
         return lines
 
 

@@ -67,6 +67,7 @@ from brake_hil.results.trend_statistics import (
     _no_fit,
 )
 from brake_hil.types import BoolArray, FloatArray, IntArray
+from brake_hil.words import counted
 
 __all__ = [
     "ADVICE",
@@ -154,7 +155,7 @@ class RigTrend:
         runs = len(self.rows)
         lines = list(self.findings)
         if runs < TREND_RUNS:
-            lines.append(f"{_runs(runs)}: too few to test a trend; {TREND_RUNS} needed")
+            lines.append(f"{counted(runs, 'run')}: too few to test a trend; {TREND_RUNS} needed")
         elif not lines:
             lines.append(_nothing_found(self.series, runs))
         carried = {s.name for s in self.series if s.modelled and s.finding}
@@ -171,10 +172,6 @@ class RigTrend:
             names = ", ".join(f"{s.words} ({int(s.named.sum())} of {s.named.size})" for s in named)
             lines.append(f"named in most runs, without a trend: {names}")
         return lines + list(self.notes)
-
-
-def _runs(count: int) -> str:
-    return f"{count} run{'' if count == 1 else 's'}"
 
 
 def _nothing_found(series: Sequence[Series], runs: int) -> str:

@@ -24,7 +24,7 @@ from brake_hil.report.next_steps import next_steps, noise_words
 from brake_hil.virtual_rig.effects import make_effect
 from brake_hil.virtual_rig.excitation import seed_pulsing
 from brake_hil.virtual_rig.simulator import simulate_rig
-from test.conftest import CONFIG
+from test.conftest import CONFIG, PROJECT
 
 
 @pytest.fixture(scope="module")
@@ -119,14 +119,36 @@ def test_next_steps_without_named_physics_run_no_improved_model(tmp_path: Path) 
 def test_a_capped_confidence_is_said_in_words_not_as_a_number() -> None:
     from types import SimpleNamespace
 
-    from brake_hil.report.diagnosis_report import _confidence_figure
+    from brake_hil.report.diagnosis_report import _confidence_words
 
-    measured = SimpleNamespace(confidence=0.8312, confidence_capped=None)
+    measured = SimpleNamespace(confidence=0.9312, confidence_capped=None)
     capped = SimpleNamespace(confidence=0.711, confidence_capped="not sure it is alone")
-    assert _confidence_figure(measured) == "confidence 0.83"  # type: ignore[arg-type]
-    words = _confidence_figure(capped)  # type: ignore[arg-type]
-    assert "not sure it is alone" in words and "cap" in words
+    assert _confidence_words(measured) == "high (confidence 0.93)"  # type: ignore[arg-type]
+    words = _confidence_words(capped)  # type: ignore[arg-type]
+    assert words.startswith("likely, not sure it is alone: a rule's cap")  # as the CLI says
     assert not re.search(r"\d", words)
+
+
+def test_the_reports_runner_up_is_the_explanations_next_hypothesis() -> None:
+    """Both name the hypothesis with the next largest share of the posterior (not the one
+    with the next largest error cut, which may be a pair a physics check set aside)."""
+    from types import SimpleNamespace
+
+    from brake_hil.diagnosis.result import runner_up
+    from brake_hil.diagnosis.summary import Summary
+    from brake_hil.diagnosis.verdict import decide
+    from brake_hil.report.diagnosis_report import _confidence_words
+
+    data = PROJECT / "test" / "diagnosis" / "data" / "lab_seal_weak.summary.json"
+    summary = Summary.from_dict(json.loads(data.read_text()))
+    verdict = decide(summary)
+    rival = runner_up(summary, verdict.effects)
+    assert rival is not None
+    shown = SimpleNamespace(
+        confidence=0.75, confidence_capped=None, summary=summary, effects=verdict.effects
+    )
+    words = _confidence_words(shown)  # type: ignore[arg-type]
+    assert f"check the runner-up, {rival[0]}, at {rival[1]:.2f}" in words
 
 
 def test_the_explanation_gives_the_nrmse_as_compare_does(report: tuple[Path, str]) -> None:

@@ -31,11 +31,17 @@ class CasesVerb(Verb):
         )
         parser.add_argument("--seed", type=int, default=0, help="draws the cases (0)")
         parser.add_argument(
-            "--pulsing-seconds", type=float, default=5.0, help="per pressure segment (5: 18 s)"
+            "--pulsing-seconds",
+            type=float,
+            default=5.0,
+            help="seconds of steady pulsing per pressure (5: an 18 s recording)",
         )
         add_workers_arguments(parser)
         parser.add_argument(
-            "--error-scale", type=float, default=1.0, help="scales the rig tolerances (1 sigma)"
+            "--error-scale",
+            type=float,
+            default=1.0,
+            help="multiplies the rig-value errors drawn (1: as the tolerances state them)",
         )
         parser.add_argument(
             "--kind",
@@ -51,7 +57,8 @@ class CasesVerb(Verb):
             default="contract",
             help="how the truth rigs differ from their files: contract (default: every "
             "toleranced value uniform within its tolerance, with and without air) or seed "
-            "(the draw of the stored sets, to replay them)",
+            "(each error drawn from a normal of half its tolerance, clipped at one: how the "
+            "stored sets were drawn, to replay them)",
         )
         parser.add_argument(
             "--family",
@@ -81,7 +88,7 @@ class CasesVerb(Verb):
             type=_megapascals,
             default=None,
             metavar="MPA,MPA,...",
-            help="one steady segment per maximum pressure (default: the paper's 1.38,2.07,2.76)",
+            help="one steady segment per maximum pressure (default: the paper's, 1.38,2.07,2.76)",
         )
 
     def main(self, args: argparse.Namespace) -> int:

@@ -66,7 +66,7 @@ class CompareVerb(Verb):
     """The paper's Table 4-5 metrics per channel."""
 
     name = "compare"
-    help = "run the rig's LTI model on a recording"
+    help = "run the rig's LTI model on a recording: Tables 4-5 metrics (ptp ratio, tau/T, NRMSE)"
 
     def add_arguments(self, parser: argparse.ArgumentParser) -> None:
         """``RECORDING [--rig RIG] [--json F] [--plot F] [--db URL]``."""

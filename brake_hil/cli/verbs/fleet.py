@@ -34,7 +34,10 @@ class FleetVerb(Verb):
         )
         parser.add_argument("--seed", type=int, default=0, help="draws the rigs and the noise (0)")
         parser.add_argument(
-            "--pulsing-seconds", type=float, default=5.0, help="per pressure segment (5: 18 s)"
+            "--pulsing-seconds",
+            type=float,
+            default=5.0,
+            help="seconds of steady pulsing per pressure (5: an 18 s recording)",
         )
         add_workers_arguments(parser)
 

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 from brake_hil.cli.progress import FleetBar, fleet_bar
 from brake_hil.cli.verb import Verb, add_database_argument
 from brake_hil.cli.workers import add_workers_arguments, workers_from_args
+from brake_hil.words import counted
 
 if TYPE_CHECKING:
     from brake_hil.app.parallel import Outcome
@@ -33,7 +34,7 @@ class RegressVerb(Verb):
     """
 
     name = "regress"
-    help = "replay recordings through the model vs a baseline"
+    help = "replay recordings through the model; their Tables 4-5 metrics vs a baseline"
 
     def add_arguments(self, parser: argparse.ArgumentParser) -> None:
         """``RECORDING... --baseline F [--model F] [--update] [--db URL]``, the workers."""
@@ -116,7 +117,7 @@ def _print_replays(result: Regression) -> None:
             f"{replay.model_file} ({source}) at {replay.replay_factor:.0f}x real time, {scored}"
         )
     print(
-        f"{len(result.results)} recordings, {result.data_s:.1f} s of data in "
+        f"{counted(len(result.results), 'recording')}, {result.data_s:.1f} s of data in "
         f"{result.wall_s:.2f} s wall time"
     )
     for key, reason in result.skipped.items():
@@ -164,7 +165,7 @@ def _status(result: Regression) -> int:
     if result.moved:
         print(f"{len(result.moved)} metrics moved past their tolerance or have no baseline")
     if result.lost:
-        print(f"{len(result.lost)} recordings of the baseline no longer hold steady pulsing")
+        print(f"{counted(len(result.lost), 'recording')} of the baseline no longer scored")
     if result.failed:
         return 1
     if not result.results:

@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from brake_hil.cli.verb import Verb
+from brake_hil.words import counted
 
 __all__ = ["TrendVerb"]
 
@@ -60,7 +61,9 @@ class TrendVerb(Verb):
             for line in rig.summary():
                 print(f"  {line}")
         for recording in result.recordings:
-            print(f"{recording.recording} ({recording.kind}): {len(recording.runs)} runs")
+            print(
+                f"{recording.recording} ({recording.kind}): {counted(len(recording.runs), 'run')}"
+            )
             for line in recording.summary():
                 print(f"  {line}")
         print(f"report: {result.report_path}")

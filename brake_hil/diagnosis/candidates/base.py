@@ -55,7 +55,7 @@ class CandidateParameter(NamedTuple):
 class Context:
     """What a candidate may know of the rig and the recording (never the label)."""
 
-    seal: SealProperties  # per-seal F_fs, k_s (seed eqs. 2-3)
+    seal: SealProperties  # per-seal F_fs, k_s (the paper's eqs. 2-3)
     bore_volume: float  # V_b, m^3 (eq. 20)
     flow_amplitude: float  # |Q_h| amplitude of the calibrated LTI model, m^3/s
     transducer_distance: float  # l_c, m
@@ -66,7 +66,7 @@ class Context:
 
 
 def rig_context(rig: Rig, flow_amplitude: float, time_reference: float) -> Context:
-    """The Context of a rig (seed eqs. 2-3, 13, 20) for a model's flow and time reference."""
+    """The Context of a rig (eqs. 2-3, 13, 20 of the paper) for a flow and time reference."""
     viscosity = rig.fluid.viscosity
     hose = line_resistance(rig.hose, viscosity)
     total = (

@@ -25,7 +25,7 @@ class BoreFriction(Candidate):
 
     As the caliper rotates by ``x_c / l_c`` the bore wall pushes on the piston with a normal
     force ``2 N_b = 4 A_eb p_b |x_c| / l_c``; sliding against it costs Coulomb friction
-    ``F_fb = mu_fb 4 A_eb p_b |x_c| / l_c`` (seed eq. 8). Modelled as a stiff contact spring in
+    ``F_fb = mu_fb 4 A_eb p_b |x_c| / l_c`` (eq. 8). Modelled as a stiff contact spring in
     series with a slider whose threshold follows that force, in parallel with the seal.
     """
 

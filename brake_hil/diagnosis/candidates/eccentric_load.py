@@ -54,7 +54,7 @@ class EccentricLoad(Candidate):
 
     When the block's centre of force does not coincide with the pistons', the moment arms
     ``b_p``, ``b_k``, ``b_b``, ``b_c`` make the support columns carry part of the load, so the
-    force on the caliper body is ``s A_eb p_b`` (seed eq. 22, five-washer results). The share
+    force on the caliper body is ``s A_eb p_b`` (the paper's eq. 22, five washers). The share
     may shift with load as the contact settles, to second order in the load about ``p_ref`` =
     1 MPa: ``s = 1 + s_0 + s_1 u + s_2 u^2``, ``u = (p_b - p_ref) / p_ref`` (a seating
     contact's share changes fastest at low load and levels off). It scales x_c and leaves p_b

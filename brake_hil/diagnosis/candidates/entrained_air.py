@@ -40,7 +40,7 @@ class EntrainedAir(Candidate):
 
     Air bubbles in the fluid compress isothermally (Boyle), so their volume ``V_a = j V_b
     p_atm / p_abs`` and the bore chamber's compliance gains ``j V_b p_atm / p_abs^2``: soft at
-    low pressure, stiff at high (seed eq. 18 linearises it at the mean pressure; Merritt,
+    low pressure, stiff at high (the paper's eq. 18 linearises it at the mean pressure; Merritt,
     Hydraulic Control Systems, 1967, section 2.5). ``j`` is the air's volume share at gauge
     zero beyond what the calibrated compliance holds.
     """

@@ -43,7 +43,7 @@ class HoseNode(Term):
 class HoseCompliance(Candidate):
     """Hose compliance: the line stores fluid as its walls swell.
 
-    The seed folds the pipe's and hose's wall compliance into the bore's effective bulk
+    The paper folds the pipe's and hose's wall compliance into the bore's effective bulk
     modulus (eq. 18) and neglects it in the flow equation (eq. 21c). A braided hose's
     swelling is a compliance of its own between the valve and the bore: one lumped node of
     compliance ``C_h`` that splits the line into an upstream part (pipe and valve: their

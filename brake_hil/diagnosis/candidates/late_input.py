@@ -30,7 +30,7 @@ LATE_INPUT = EffectEntry(
         "multiplexer, a gateway), so the model, driven by the p_i it reads, predicts every "
         "output late by the same time; the outputs lead the prediction alike."
     ),
-    source="the seed's tau of a few per cent of 200 ms; any DAQ's channel skew",
+    source="the paper's tau of a few per cent of 200 ms; any DAQ's channel skew",
     signature="every output ahead of the prediction by the same time, amplitudes unchanged",
     channels=OUTPUT_CHANNELS,
     quantities=(

@@ -45,7 +45,7 @@ class OrificeFlow(Candidate):
     """Orifice flow: the needle valve drops pressure as ``K Q |Q|``, not ``R_v Q``.
 
     Past a throttling needle the flow separates and the drop follows the orifice equation,
-    ``dp = rho Q |Q| / (2 C_d^2 A^2)`` (Merritt 1967, eq. 3-6; the seed linearises it,
+    ``dp = rho Q |Q| / (2 C_d^2 A^2)`` (Merritt 1967, eq. 3-6; the paper linearises it,
     eqs. 15-16). Written as a share ``phi`` of the line resistance that becomes quadratic at
     the flow amplitude ``Q_0`` of the calibrated model: ``R (1 - phi) Q + phi R Q |Q| / Q_0``,
     so the drop is unchanged at ``Q_0`` and grows faster above it.

@@ -76,7 +76,7 @@ class _Relaxation(Step):
 class GrooveSlider(Term):
     """A Jenkins element whose stuck spring is softer on apply edges than on release edges.
 
-    The seed's multivalued seal stiffness (the static stiffness while the seal sticks, none
+    The paper's multivalued seal stiffness (the static stiffness while the seal sticks, none
     while it slips) with the groove's asymmetry: stuck after slipping back (an apply edge of
     the loop, or from rest) the spring is ``(1 - a) k_j``; stuck after slipping out (a release
     edge) it is ``(1 + a) k_j``. It slips at ``F`` either way, so the loop's stick widths
@@ -155,10 +155,10 @@ class SealGrooveAsymmetry(Candidate):
     """Seal groove asymmetry: the seal pushes back harder on release than it yields on apply.
 
     Rectangular-seal grooves are chamfered on the pressure side, so the seal shears easily as
-    the piston moves out and rolls it back more stiffly (the seed names the asymmetry and
+    the piston moves out and rolls it back more stiffly (the paper names the asymmetry and
     ignores it, section "Characterisation of k_eh", and asks for it in a stick-slip seal model,
     its conclusion; Anwana, Cai and Chang, SAE 2002-01-0927). A share ``phi`` of the seal is
-    the seed's multivalued seal: a Jenkins element (:class:`GrooveSlider`) stuck with stiffness
+    the paper's multivalued seal: a Jenkins element (:class:`GrooveSlider`) stuck with stiffness
     ``(1 - a) k_j`` on the loop's apply edges and ``(1 + a) k_j`` on its release edges,
     slipping at ``F``. The rest stays the calibrated equivalent spring, with stiffness
     ``(1 - a) k_eh`` while its deflection from the relaxed position is on the apply side and

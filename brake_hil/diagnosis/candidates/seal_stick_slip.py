@@ -21,9 +21,9 @@ class SealStickSlip(Candidate):
     """Stick-slip seal friction in place of the equivalent viscous ``k_eh``, ``c_eh``.
 
     While the piston seal sticks it shears as a spring (both seals: ``k_j``, about ``2 k_s``,
-    seed eq. 3); once its force reaches the static friction threshold (both seals: about
+    the paper's eq. 3); once its force reaches the static friction threshold (both seals: about
     ``2 F_fs = 2 mu_fs N_s``, eq. 2) it slips with that force and carries almost no stiffness
-    (the seed's two-valued stiffness, section "Characterisation of k_eh"). A Jenkins element:
+    (the paper's two-valued stiffness, section "Characterisation of k_eh"). A Jenkins element:
     an ideal spring in series with an ideal Coulomb slider. A share ``phi`` of the seal's
     response is frictional; the rest stays the calibrated equivalent spring and damper (a
     seal that slips over only part of its contact, or one whose rubber shears viscously).

@@ -43,7 +43,7 @@ class SensorDelay(Candidate):
     """Sensor delay: each channel is acquired late by its own delay.
 
     Multiplexed DAQs, anti-alias filters and CAN gateways delay channels by different times;
-    the seed's ``tau`` of a few per cent of 200 ms is a few milliseconds. Modelled as a pure
+    the paper's ``tau`` of a few per cent of 200 ms is a few milliseconds. Modelled as a pure
     delay of each measured output relative to ``p_i`` (a negative delay means ``p_i`` itself
     is acquired late).
     """

@@ -36,7 +36,7 @@ DAQ_C = EffectEntry(
         "the channels one after another (a few microseconds apart) on a clock a few ppm off; "
         "each channel picks up mains hum and a slow zero drift beside its white noise."
     ),
-    source="acquisition chain (not in the seed)",
+    source="acquisition chain (not in the paper)",
     signature="none meant: a DAQ within a lab's specification",
     channels=("p_b", "F_k", "x_c"),
     quantities=(Quantity("seed", "-", "seed of the chain's hum phases and drifts"),),
