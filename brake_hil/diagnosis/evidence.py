@@ -20,6 +20,7 @@ from brake_hil.diagnosis.fitting import Model
 from brake_hil.diagnosis.segment_evidence import SegmentSignals
 from brake_hil.topics import OUTPUT_CHANNELS
 from brake_hil.types import FloatArray
+from brake_hil.words import energy_share
 
 MISMATCH_RMS = 0.01
 """A channel whose baseline held-out RMS exceeds this (1 % of its peak-to-peak) is mismatched."""
@@ -234,9 +235,9 @@ class _Findings:
         values["even_harmonics_power_p_b"] = power
         self.findings.append(
             f"p_b's even harmonics (10 and 20 Hz) beyond the model's: "
-            f"{values['even_harmonics_p_b']:+.4f} % of its energy, {z:+.1f} standard errors of "
-            "their scatter over the cycles (a compliance that changes with pressure, as air's, "
-            "makes them; a law the same on apply and release does not)"
+            f"{energy_share(values['even_harmonics_p_b'])} of its energy, {z:.1f} standard "
+            "errors of their scatter over the cycles (a compliance that changes with pressure, "
+            "as air's, makes them; a law the same on apply and release does not)"
         )
         self.findings.append(
             "super-harmonic energy (10-25 Hz) beyond the model's: "

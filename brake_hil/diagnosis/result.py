@@ -7,6 +7,7 @@
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
+import math
 from pathlib import Path
 
 from brake_hil.diagnosis.calibration import Calibration
@@ -22,6 +23,7 @@ from brake_hil.diagnosis.residual_forms import ResidualDescription
 from brake_hil.diagnosis.summary import Summary
 from brake_hil.diagnosis.thresholds import NOISE_EXCESS
 from brake_hil.diagnosis.verdict import Verdict, confidence_text, fit_gain, fit_score
+from brake_hil.words import noise_times
 
 __all__ = ["Diagnosis", "explain"]
 
@@ -206,9 +208,9 @@ def explain(
         explanation = _explain(baseline, chosen, evidence, baseline_metrics, improved_metrics)
         if summary.excess_ratio < NOISE_EXCESS:
             explanation += (
-                f" A weak effect: the baseline misses by only {summary.excess_ratio:.1f} times "
-                f"the measurement noise's share, but {chosen.effects[0]} alone leaves "
-                f"{chosen.held_out_cost / summary.noise_cost:.1f} times it and no other "
+                f" A weak effect: the baseline misses by only "
+                f"{noise_times(summary.excess_ratio)}, but {chosen.effects[0]} alone leaves "
+                f"{noise_times(chosen.held_out_cost / summary.noise_cost)} and no other "
                 "candidate cuts the error half as much."
             )
     if groove is not None and chosen is not None:
@@ -262,23 +264,22 @@ def _nothing_named(
     if verdict.effects:
         return (
             f"The calibrated LTI model misses the held-out cycles by up to NRMSE "
-            f"{worst_nrmse:.4f}, {summary.excess_ratio:.0f} times the "
-            f"measurement noise's share, and no candidate explains it: the best, "
+            f"{worst_nrmse:.4f}, {noise_times(summary.excess_ratio)}, and no candidate "
+            f"explains it: the best, "
             f"{best.effects[0]}, cuts the error {fit_gain(baseline, best):.2f} times."
         )
     if summary.excess_ratio < NOISE_EXCESS:
         return (
             f"The calibrated LTI model explains the recording: NRMSE on the held-out cycles "
-            f"at most {worst_nrmse:.4f}, {summary.excess_ratio:.1f} times the measurement "
-            f"noise's share of the error (under {NOISE_EXCESS:g}: nothing left to name)."
+            f"at most {worst_nrmse:.4f}, {noise_times(summary.excess_ratio)} (under "
+            f"{math.sqrt(NOISE_EXCESS):.1f} times: nothing left to name)."
         )
     return (
         f"Nothing named: the calibrated LTI model misses the held-out cycles by NRMSE at most "
-        f"{worst_nrmse:.4f}, {summary.excess_ratio:.1f} times the measurement noise's share "
-        f"of the error, but what it leaves has no shape a candidate or a generic form explains "
-        f"(the best candidate, {best.effects[0]}, cuts the error only "
-        f"{fit_gain(baseline, best):.2f} times); an effect weaker than that leftover would not "
-        f"show."
+        f"{worst_nrmse:.4f}, {noise_times(summary.excess_ratio)}, but what it leaves has no "
+        f"shape a candidate or a generic form explains (the best candidate, "
+        f"{best.effects[0]}, cuts the error only {fit_gain(baseline, best):.2f} times); an "
+        f"effect weaker than that leftover would not show."
     )
 
 

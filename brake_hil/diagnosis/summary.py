@@ -15,6 +15,7 @@ from brake_hil.diagnosis.evidence import Evidence
 from brake_hil.diagnosis.fitting import Fit
 from brake_hil.diagnosis.likelihood import log_evidence, log_prior
 from brake_hil.diagnosis.thresholds import NOISE_EXCESS, PAIR_SHARE, SIGNIFICANT_Z
+from brake_hil.words import energy_share, noise_times
 
 __all__ = [
     "Hypothesis",
@@ -315,10 +316,10 @@ def unmade_signature(name: str, left: tuple[float, float, float], noise_cost: fl
     makers = ", ".join(sorted(c.name for c in CANDIDATES if c.even_harmonics))
     return (
         f"a second effect is likely; not identified: {name} fitted leaves even harmonics in the "
-        f"bore pressure ({share:.4f} % of its energy, {z:.0f} standard errors of their scatter "
-        f"over the cycles, {power / max(noise_cost, 1e-30):.0f} times the noise's share of the "
-        f"error) that its law, the same on apply and release, cannot make: the signature of "
-        f"one of {makers} (air's compliance falls with the pressure)"
+        f"bore pressure ({energy_share(share)} of its energy, {z:.0f} standard errors of their "
+        f"scatter over the cycles, {noise_times(power / max(noise_cost, 1e-30))}) that its "
+        f"law, the same on apply and release, cannot make: the signature of one of {makers} "
+        f"(air's compliance falls with the pressure)"
     )
 
 

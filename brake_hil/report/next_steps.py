@@ -14,6 +14,8 @@ import html
 from pathlib import Path
 import shlex
 
+from brake_hil.words import noise_times
+
 __all__ = ["IMPROVED_MODEL", "next_steps", "noise_words"]
 
 IMPROVED_MODEL = "improved_model.json"
@@ -25,13 +27,9 @@ def noise_words(squared_ratio: float, what: str = "the LTI model's error") -> st
     if not squared_ratio >= 0.0:
         return f"{what} against the sensor noise: not known"
     rms = squared_ratio**0.5
-    if rms >= 10:
-        times = f"{rms:.0f} times"
-    elif rms >= 1.05:
-        times = f"{rms:.1f} times"
-    else:
+    if rms < 1.05:
         return f"{what} is within the sensor noise (RMS {rms:.2f} times it)"
-    return f"{what} is {times} the sensor noise (RMS)"
+    return f"{what} is {noise_times(squared_ratio)}"
 
 
 _REGRESS = ("brake-hil", "regress", "NEW_RECORDING", "--baseline", "baseline.json")
@@ -61,6 +59,8 @@ def next_steps(
     """
     model = out / IMPROVED_MODEL
     rig: list[str | Path] = ["--rig", rig_path] if rig_path is not None else []
+    # the baseline keeps the model file given once; a new recording need not carry its own
+    model_option: list[str | Path] = ["--model", rig_path] if rig_path is not None else []
     parts = ["<h2>Next steps</h2><ol class=steps>"]
     if named:
         parts.append(
@@ -91,7 +91,7 @@ def next_steps(
         f"{_command('brake-hil', 'diagnose', 'NEW_RECORDING', *rig, '--out', again)}"
         "then keep it as the regression baseline (once, with <code>--update</code>) and "
         "hold every later recording of the rig against it (without):"
-        f"{_command(*_REGRESS, '--update')}{_command(*_REGRESS)}"
+        f"{_command(*_REGRESS, *model_option, '--update')}{_command(*_REGRESS)}"
         "A fixed rig is diagnosed with no missing physics (or a smaller held-out error "
         "cut), and <code>brake-hil trend</code> over the results database shows it over "
         "time.</li>"

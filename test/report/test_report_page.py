@@ -17,7 +17,13 @@ import pytest
 from brake_hil.app.diagnose import run_diagnose
 from brake_hil.io.recording_writer import save_recording
 from brake_hil.physics.rig import load_rig
-from brake_hil.report.diagnosis_figures import TRACES_NRMSE, loop_caption, loop_nrmse
+from brake_hil.report.diagnosis_figures import (
+    TRACES_AREA,
+    TRACES_NRMSE,
+    loop_area_ratio,
+    loop_caption,
+    loop_nrmse,
+)
 from brake_hil.report.diagnosis_report import _multiplier_words, nrmse_as_fraction
 from brake_hil.report.embed import DATA_URI_PREFIX
 from brake_hil.report.next_steps import next_steps, noise_words
@@ -96,7 +102,16 @@ def test_the_loop_caption_says_when_the_improved_model_does_not_trace_it() -> No
     assert error > TRACES_NRMSE
     caption = loop_caption(0.5, error)
     assert f"does not trace the measured loop here (NRMSE {error:.2g})" in caption
-    assert "traces the measured loop (NRMSE 0.03)" in loop_caption(0.5, 0.03)
+    assert "traces the measured loop (NRMSE 0.03; it encloses 0.90" in loop_caption(0.5, 0.03, 0.9)
+    # a thin seal loop: each coordinate within 3 %, but 0.6 of the area (the energy lost per
+    # cycle) is enclosed: the shape is not traced
+    lens = (np.cos(phase), np.cos(phase) + 0.2 * np.sin(phase))
+    thin = (np.cos(phase), np.cos(phase) + 0.12 * np.sin(phase))
+    assert loop_nrmse(thin, lens) <= TRACES_NRMSE
+    area = loop_area_ratio(thin, lens)
+    assert abs(area - 0.6) < 0.01 and abs(area - 1.0) > TRACES_AREA
+    shape = loop_caption(0.5, 0.03, area)
+    assert "follows the measured loop's extent (NRMSE 0.03) but not its shape" in shape
 
 
 def test_the_noise_and_the_rig_values_in_plain_words() -> None:

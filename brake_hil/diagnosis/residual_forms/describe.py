@@ -269,11 +269,14 @@ def _fitted(
     x, train_cost, held_cost = fit_form(form, data.train[c], data.held_out[c])
     values = form.natural(x, scale)
     overall = (total - baseline_cost + held_cost) / len(OUTPUT_CHANNELS)
+    low, high = form.bounds(x.size)
+    pinned = bool(np.any(np.isclose(x, low) | np.isclose(x, high)))
+    detail = form.detail(values, key, context)
     return FormFit(
         form=form.name,
         channel=key,
         phrase=form.phrase,
-        detail=form.detail(values, key, context),
+        detail=f"{detail} (a value held at the limit of its fit range)" if pinned else detail,
         parameters=tuple(
             FormParameter(name, float(v), u)
             for (name, u), v in zip(form.parameter_units(unit), values)
