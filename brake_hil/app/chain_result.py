@@ -51,6 +51,7 @@ class ChainResult:
     expected: int | None = None  # input samples the source was to publish (None: unknown)
     expected_cycles: dict[str, int] | None = None  # steady cycles the recording holds
     schedule_s: float | None = None  # the replay's length at its rate (s; None: unknown)
+    load: tuple[float, int] | None = None  # 1-minute load average at the end, and CPU cores
 
     @property
     def failed(self) -> dict[str, int]:
@@ -112,6 +113,7 @@ class ChainResult:
                 period.get("p99_us"),
                 latency.get("p99_us"),
                 ceiling_us=float(latency.get("ceiling_us", math.inf)),
+                load=self.load,
             ),
         ]
 
@@ -297,8 +299,13 @@ def judge_loop(
     latency_p99_us: float | None,
     limits: LoopLimits = LOOP_LIMITS,
     ceiling_us: float = math.inf,
+    load: tuple[float, int] | None = None,
 ) -> Judgement:
-    """The caliper model's p99 period error and latency against ``limits``: OK, WARN, ERROR."""
+    """The caliper model's p99 period error and latency against ``limits``: OK, WARN, ERROR.
+
+    Past OK, the line says how busy the machine was (``load``: the 1-minute load average and
+    the CPU cores), the first thing to look at when a 1 kHz loop falls behind.
+    """
     if period_p99_us is None or latency_p99_us is None:
         return Judgement(ERROR, "cannot tell the loop's timing: no model summary")
     levels = (
@@ -315,6 +322,13 @@ def judge_loop(
         f"({LEVEL_NAMES[levels[1]]}; WARN past {format_us(limits.latency_warn_us)}, "
         f"ERROR past {format_us(limits.latency_error_us)})"
     )
+    if level > OK and load is not None:
+        average, cores = load
+        busy = "busy: other work took the CPU the loop needed" if average >= cores else "not busy"
+        line += (
+            f"; the machine's load average was {average:.1f} on {cores} cores, the chain's own "
+            f"nodes included ({busy})"
+        )
     return Judgement(level, line)
 
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
+import os
 from pathlib import Path
 import subprocess
 import time
@@ -156,6 +157,7 @@ class _Run:
             expected=self.expected,
             expected_cycles=self.expected_cycles,
             schedule_s=self.schedule_s,
+            load=(os.getloadavg()[0], os.cpu_count() or 1),
         )
 
 

@@ -198,3 +198,13 @@ def test_the_loop_limits_are_the_caliper_models_own_levels() -> None:
     assert LOOP_LIMITS.latency_error_us == settings.input_silent_ms * 1000
     assert LOOP_LIMITS.period_error_us == settings.input_silent_ms * 1000
     assert LOOP_LIMITS.period_warn_us == LATE_TICK_NS / 1000
+
+
+def test_a_late_loop_says_how_busy_the_machine_was() -> None:
+    late = judge_loop(13_400.0, 300.0, load=(3.1, 2))
+    assert late.line.endswith(
+        "the machine's load average was 3.1 on 2 cores, the chain's own nodes included (busy: "
+        "other work took the CPU the loop needed)"
+    )
+    assert judge_loop(13_400.0, 300.0, load=(0.6, 2)).line.endswith("(not busy)")
+    assert "load average" not in judge_loop(60.0, 300.0, load=(3.1, 2)).line  # OK: no word
