@@ -20,7 +20,7 @@ def noise_times(squared_ratio: float) -> str:
 
 
 def energy_share(percent: float) -> str:
-    """A share of a signal's energy in plain digits: ``0.12 %``, or ``under 0.01 %``."""
-    if abs(percent) < 0.01:
-        return "under 0.01 %"
-    return f"{percent:.2f} %"
+    """A share of a signal's energy: ``0.12 %``, ``0.0082 %``, or ``under 0.0001 %``."""
+    if abs(percent) < 1e-4:
+        return "under 0.0001 %"
+    return f"{percent:.2f} %" if abs(percent) >= 0.01 else f"{percent:.2g} %"

@@ -16,6 +16,6 @@ echo "== ruff"
 echo "== mypy"
 .venv/bin/mypy brake_hil/physics brake_hil/analysis brake_hil/diagnosis brake_hil/live brake_hil/runtime \
   brake_hil/io brake_hil/virtual_rig brake_hil/results brake_hil/app brake_hil/cli brake_hil/types.py \
-  brake_hil/topics.py brake_hil/errors.py
+  brake_hil/topics.py brake_hil/errors.py brake_hil/words.py
 echo "== pytest"
 .venv/bin/python -m pytest -q -p no:cacheprovider test "$@"

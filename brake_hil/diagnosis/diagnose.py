@@ -41,7 +41,7 @@ from brake_hil.diagnosis.residual_forms import (
     describe_residual,
 )
 from brake_hil.diagnosis.result import Diagnosis, Metrics, explain
-from brake_hil.diagnosis.rig_findings import for_verdict
+from brake_hil.diagnosis.rig_findings import air_beside, for_verdict
 from brake_hil.diagnosis.summary import Hypothesis, Summary, plausible, ratio, summarise
 from brake_hil.diagnosis.thresholds import (
     ACCEPT_RATIO,
@@ -332,10 +332,20 @@ def _decide_with_pairs(
     )
     pairs = fits.pairs(ruled_out)
     left = fits.even_left()
+    mean_pressure = float(np.mean([w.mean_pressure for w in fits.dataset.train]))
 
     def summary_of(pairs: list[Fit]) -> Summary:
+        air = air_beside(fits.calibration, fits.singles, pairs, mean_pressure)
         return summarise(
-            fits.baseline, fits.singles, pairs, noise_cost, evidence, ruled_out, form_gains, left
+            fits.baseline,
+            fits.singles,
+            pairs,
+            noise_cost,
+            evidence,
+            ruled_out,
+            form_gains,
+            left,
+            air,
         )
 
     summary = summary_of(pairs)
@@ -343,9 +353,7 @@ def _decide_with_pairs(
     if unfitted_pairs_matter(summary, verdict):
         fits.say("fitting the pairs left out, as rivals or partners of the verdict")
         pairs = fits.pairs()
-        summary = summarise(
-            fits.baseline, fits.singles, pairs, noise_cost, evidence, ruled_out, form_gains
-        )
+        summary = summary_of(pairs)
         verdict = decide(summary)
     return summary, verdict, pairs
 

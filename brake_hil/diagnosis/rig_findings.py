@@ -19,24 +19,29 @@ times it (the bundled hose recording's calibration put 1.6 times the air beside 
 own compliance; a 1.6 threshold alone called it more air). More than ``AIR_MORE_RATIO``
 times the rig file's is more air than it says: bleed the brake. Less is the rig file's own
 air, whose compliance follows the pressure within each cycle (the LTI model linearises it at
-the mean pressure, seed eq. 18); the improved model carries it.
+the mean pressure, the paper's eq. 18); the improved model carries it. Beside another effect
+named, the air a pair with entrained air fits is said too when it is more than the rig file's
+and the pair explains a tenth of what the single leaves (:func:`air_beside`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 import re
 
 import numpy as np
 
 from brake_hil.diagnosis.calibration import Calibration
+from brake_hil.diagnosis.fitting import Fit
 from brake_hil.physics.calibrated_values import VALUE_LABELS
 from brake_hil.physics.parameters import chamber_volumes, derive_parameters, piston_area
 from brake_hil.physics.rig import Rig
 
 __all__ = [
+    "AIR_BESIDE_CUT",
     "AIR_MORE_RATIO",
     "FLAG_SIGMAS",
+    "air_beside",
     "air_finding",
     "air_in_words",
     "verdict_notes",
@@ -59,8 +64,15 @@ following the pressure): 0.9-1.35 times with the rig file's air, 2.6-4.3 times w
 times it; with twice it 1.2-2.6 times (most under the band: not said), and 1.6 on the bundled
 hose recording (its hose's compliance partly taken by the air, the reason the calibrated air
 alone must also leave its band)."""
+AIR_BESIDE_CUT = 1.1
+"""Cut of what a single leaves by a pair with entrained air beside it, above which the air
+that pair fits counts (:func:`air_beside`). Where nothing is beside the single a pair's cut
+scatters about 1 (0.96-1.14 on fresh sets, the larger where the pair's air stays the rig
+file's); this asks a tenth of the single's leftover explained, with more air than the rig file
+says, both."""
 ATMOSPHERE = 1.013e5
 """Absolute pressure of gauge zero (Pa), as the entrained_air candidate's."""
+AIR_EFFECT = "entrained_air"
 AIR_VALUES = ("entrained_air", "air_fraction", "bore_compliance")
 """The effect and the calibrated values an air finding is about (the trend's advice)."""
 AS_RIG_FILE = (
@@ -252,3 +264,35 @@ def air_in_words(explanation: str) -> str | None:
     if more is not None:
         return air_text("more_than_rig_file", float(more.group(1)))
     return AS_RIG_FILE if f"The air: {AS_RIG_FILE}" in explanation else None
+
+
+def air_beside(
+    calibration: Calibration,
+    singles: Sequence[Fit],
+    pairs: Sequence[Fit],
+    mean_pressure: float,
+) -> dict[str, tuple[float, float]]:
+    """Each single's pair with entrained air: the air it fits over the rig file's, and its cut.
+
+    The air is :func:`air_finding`'s (the calibrated fraction and the candidate's share at
+    the mean pressure) from the pair's own values; the cut is how many times the pair cuts
+    the held-out error the single leaves. Both past their bars (``AIR_MORE_RATIO``,
+    ``AIR_BESIDE_CUT``) say more air than the rig file says beside the single, whatever the
+    posterior makes of one more parameter (:meth:`.summary.Summary.doubt`).
+    """
+    found = {}
+    for single in singles:
+        name = single.effects[0]
+        pair = next((p for p in pairs if set(p.effects) == {name, AIR_EFFECT}), None)
+        if pair is None or name == AIR_EFFECT:
+            continue
+        values = pair.parameters()
+        multipliers = {
+            key: values.get(f"calibration.{key}", value)
+            for key, value in calibration.multipliers.items()
+        }
+        air = air_finding(calibration, multipliers, values.get("air_share"), mean_pressure)
+        if air is not None:
+            cut = single.held_out_cost / max(pair.held_out_cost, 1e-300)
+            found[name] = (float(air["ratio"]), float(cut))  # type: ignore[arg-type]
+    return found

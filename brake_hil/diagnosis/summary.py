@@ -14,6 +14,7 @@ from brake_hil.diagnosis.candidates import CANDIDATES, candidate, own_columns
 from brake_hil.diagnosis.evidence import Evidence
 from brake_hil.diagnosis.fitting import Fit
 from brake_hil.diagnosis.likelihood import log_evidence, log_prior
+from brake_hil.diagnosis.rig_findings import AIR_BESIDE_CUT, AIR_MORE_RATIO
 from brake_hil.diagnosis.thresholds import NOISE_EXCESS, PAIR_SHARE, SIGNIFICANT_Z
 from brake_hil.words import energy_share, noise_times
 
@@ -59,6 +60,8 @@ class Summary:
     even_left: dict[str, tuple[float, float, float]] = field(default_factory=dict)
     form_gain: float = 1.0  # the best generic form's held-out improvement (residual_forms)
     form_gains: dict[str, float] = field(default_factory=dict)  # "form channel": improvement
+    # single -> (air over the rig file's, cut of the single's error) of its pair with air
+    air_beside: dict[str, tuple[float, float]] = field(default_factory=dict)
 
     def form_bar(self, effects: tuple[str, ...]) -> float:
         """The best generic form's improvement that counts against ``effects``.
@@ -85,6 +88,9 @@ class Summary:
         if len(effects) != 1:
             return None
         partner = self.hidden_partner(effects[0])
+        air = self.air_beside_words(effects[0])
+        if air is not None and (partner is None or partner[0] is None):
+            return air
         unmade = self.unmade(effects[0])
         if unmade is not None and (partner is None or partner[0] is None):
             return unmade
@@ -102,6 +108,21 @@ class Summary:
             f"{effects[0]} alone: a second effect too small a share of the baseline's error "
             f"to be named ({100 * PAIR_SHARE:g} % is asked), or a part of {effects[0]}'s "
             "physics its model does not follow"
+        )
+
+    def air_beside_words(self, name: str) -> str | None:
+        """More air than the rig file says beside single ``name``, in words (or None).
+
+        Its pair with entrained air fits more than ``AIR_MORE_RATIO`` times the rig file's
+        air and cuts what it leaves ``AIR_BESIDE_CUT`` times or more (:func:`.air_beside`).
+        """
+        found = self.air_beside.get(name)
+        if found is None or found[0] <= AIR_MORE_RATIO or found[1] < AIR_BESIDE_CUT:
+            return None
+        return (
+            f"with entrained_air beside it the fit finds {found[0]:.1f} times the rig file's "
+            f"air and leaves {found[1]:.2f} times less of the error than {name} alone: more "
+            "air than the rig file says is likely there too (bleed the brake and test again)"
         )
 
     def unmade(self, name: str) -> str | None:
@@ -223,6 +244,10 @@ class Summary:
             },
             form_gain=float(document.get("form_gain", 1.0)),
             form_gains={str(k): float(v) for k, v in document.get("form_gains", {}).items()},
+            air_beside={
+                str(k): (float(v[0]), float(v[1]))
+                for k, v in document.get("air_beside", {}).items()
+            },
         )
 
 
@@ -245,6 +270,7 @@ def summarise(
     pairs_ruled_out: frozenset[tuple[str, ...]] = frozenset(),
     form_gains: dict[str, float] | None = None,
     even_left: dict[str, tuple[float, float, float]] | None = None,
+    air_beside: dict[str, tuple[float, float]] | None = None,
 ) -> Summary:
     """The decision's inputs from the fits.
 
@@ -282,6 +308,7 @@ def summarise(
         even_left=dict(even_left or {}),
         form_gain=max((form_gains or {}).values(), default=1.0),
         form_gains=dict(form_gains or {}),
+        air_beside=dict(air_beside or {}),
     )
 
 

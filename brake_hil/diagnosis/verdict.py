@@ -386,7 +386,11 @@ def _caps(summary: Summary, standing: _Standing) -> _Caps:
     if chosen is not None and len(chosen.effects) == 1:
         name = chosen.effects[0]
         partner = summary.hidden_partner(name)
-        if name in summary.not_alone or summary.unmade(name) is not None:
+        if (
+            name in summary.not_alone
+            or summary.unmade(name) is not None
+            or summary.air_beside_words(name) is not None
+        ):
             fixed.append((STAND_IN_MARGIN, NOT_ALONE))
         if partner is not None:
             single = next(h for h in summary.singles if h.effects == chosen.effects)

@@ -9,12 +9,14 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from pathlib import Path
 
 import numpy as np
 
 from brake_hil.diagnosis.candidates import candidate
 from brake_hil.diagnosis.dataset import Window
 from brake_hil.diagnosis.evidence import SegmentSignals, even_harmonics_z
+from brake_hil.diagnosis.rig_findings import AIR_BESIDE_CUT, AIR_MORE_RATIO
 from brake_hil.diagnosis.summary import Hypothesis, Summary, unmade_signature
 from brake_hil.diagnosis.thresholds import SIGNIFICANT_Z
 from brake_hil.diagnosis.verdict import NOT_ALONE, decide
@@ -122,3 +124,28 @@ def test_the_wearing_seal_is_named_but_not_surely_alone() -> None:
     # an older diagnosis.json without the key replays as before
     older = {k: v for k, v in doubted.as_dict().items() if k != "even_left"}
     assert decide(Summary.from_dict(older)) == decide(dataclasses.replace(doubted, even_left={}))
+
+
+def test_more_air_than_the_rig_file_beside_the_named_seal_is_said() -> None:
+    """The 10-run lab's wearing rig at its last run: seal stick-slip 0.9 and air at ten
+    times the rig file's. The pair with air cuts what the seal leaves only 1.15 times (the
+    posterior does not pay for it), but it fits twice the rig file's air: doubted, and said.
+    The same cut with the rig file's own air, or that air with no cut, says nothing of air
+    (the seal's fit still leaves even harmonics its law cannot make: that doubt stays)."""
+    data = Path(__file__).with_name("data") / "lab_seal_air_strong.summary.json"
+    stored = Summary.from_dict(json.loads(data.read_text()))
+    ratio, cut = stored.air_beside["seal_stick_slip"]
+    assert ratio > AIR_MORE_RATIO and cut >= AIR_BESIDE_CUT
+    verdict = decide(stored)
+    assert verdict.effects == ("seal_stick_slip",) and verdict.capped == NOT_ALONE
+    words = stored.doubt(("seal_stick_slip",))
+    assert words is not None and words.startswith(
+        f"with entrained_air beside it the fit finds {ratio:.1f} times the rig file's air"
+    )
+    assert "bleed the brake" in words
+    for kept in ((1.3, cut), (ratio, 1.002)):
+        plain = dataclasses.replace(stored, air_beside={"seal_stick_slip": kept})
+        assert plain.air_beside_words("seal_stick_slip") is None
+        assert "the signature of one of" in str(plain.doubt(("seal_stick_slip",)))
+    older = {k: v for k, v in stored.as_dict().items() if k != "air_beside"}
+    assert Summary.from_dict(older).air_beside == {}  # stored before: replays as then
