@@ -5,6 +5,7 @@ Light on purpose (no numpy, no rosbags): ``brake-hil --help`` imports it.
 
 from __future__ import annotations
 
+import difflib
 import os
 from pathlib import Path
 from typing import Final
@@ -24,10 +25,18 @@ def existing_recording(recording: Path) -> Path:
     output is made.
 
     Raises:
-        RecordingError: "no such recording", naming the path.
+        RecordingError: "no such recording", naming the path, and the closest name beside it
+            when one is close (``difflib``): ``did you mean bags/effect_hose_compliance?``.
     """
     if not os.path.lexists(recording):
-        raise RecordingError(f"{recording}: no such recording")
+        base = Path(str(recording).rstrip("/"))
+        try:
+            names = [p.name for p in base.parent.iterdir() if not p.name.endswith(".yaml")]
+        except OSError:
+            names = []
+        close = difflib.get_close_matches(base.name, names, n=1, cutoff=0.6)
+        hint = f"; did you mean {base.parent / close[0]}?" if close else ""
+        raise RecordingError(f"{recording}: no such recording{hint}")
     return recording
 
 
