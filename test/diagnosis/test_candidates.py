@@ -52,7 +52,7 @@ def _context(rig: Rig) -> Context:
 def test_candidate_contract(candidate: Candidate, default_rig: Rig) -> None:
     description = candidate.describe()
     assert len(description) > 150, "a paragraph of physics"
-    assert re.search(r"seed|eq\.|Merritt|Andrade|SAE|Boyle", description), "names its source"
+    assert re.search(r"paper|eq\.|Merritt|Andrade|SAE|Boyle", description), "names its source"
     assert candidate.signature
     context = _context(default_rig)
     start = candidate.start(context)
