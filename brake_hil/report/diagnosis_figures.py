@@ -46,6 +46,10 @@ LEGEND_SIZE = 10
 TRACES_NRMSE = 0.1
 """Largest NRMSE (of either coordinate) of a model's loop against the measured one at which
 the caption says the model traces it."""
+TRACES_WORST = 0.1
+"""Largest deviation of a model's loop at any instant from the measured one's, as a share of
+the measured loop's span (either coordinate), at which the caption says the model traces it:
+a sharp-cornered loop over a rounded one can hold its NRMSE and area and still be seen apart."""
 TRACES_AREA = 0.2
 """Largest relative difference of a model's loop area from the measured loop's at which the
 caption says the model traces it: the area is the energy the seal dissipates per cycle, which
@@ -216,15 +220,30 @@ def loop_area_ratio(
     return area(*model) / reference if reference > 0.0 else math.nan
 
 
-def loop_caption(baseline: float, improved: float, area_ratio: float = 1.0) -> str:
-    """What the loop figure shows, true to its NRMSEs and areas (``TRACES_*``)."""
+def loop_worst(
+    model: tuple[np.ndarray, np.ndarray], measured: tuple[np.ndarray, np.ndarray]
+) -> float:
+    """A model loop's largest deviation at any instant over the measured span (either axis)."""
+    return max(
+        float(np.max(np.abs(m - r)) / max(float(np.ptp(r)), 1e-300))
+        for m, r in zip(model, measured)
+    )
+
+
+def loop_caption(
+    baseline: float, improved: float, area_ratio: float = 1.0, worst: float = 0.0
+) -> str:
+    """What the loop figure shows, true to its NRMSEs, worst point and areas (``TRACES_*``)."""
     area = f"it encloses {area_ratio:.2f} of the measured loop's area"
-    if improved <= TRACES_NRMSE and abs(area_ratio - 1.0) <= TRACES_AREA:
-        verdict = f"the improved model traces the measured loop (NRMSE {improved:.2g}; {area})"
+    off = f"at worst {100 * worst:.0f} % of its span off"
+    if improved <= TRACES_NRMSE and abs(area_ratio - 1.0) <= TRACES_AREA and worst <= TRACES_WORST:
+        verdict = (
+            f"the improved model traces the measured loop (NRMSE {improved:.2g}, {off}; {area})"
+        )
     elif improved <= TRACES_NRMSE:
         verdict = (
             f"<b>the improved model follows the measured loop's extent (NRMSE {improved:.2g}) "
-            f"but not its shape</b>: {area}, the energy the seal loses per cycle"
+            f"but not its shape</b>: {off}; {area}, the energy the seal loses per cycle"
         )
     else:
         verdict = (
@@ -280,6 +299,7 @@ def figures(diagnosis: Diagnosis) -> Figures:
         label: loop_nrmse(loops[label], loops["measured"]) for label in ("baseline", "improved")
     }
     area = loop_area_ratio(loops["improved"], loops["measured"])
+    worst = loop_worst(loops["improved"], loops["measured"])
     steady = bool(diagnosis.evidence.phase_profile)  # phase and harmonics need cycles
     shown = (
         (
@@ -310,7 +330,7 @@ def figures(diagnosis: Diagnosis) -> Figures:
                 (
                     _loop_plot(loops),
                     "seal hysteresis loop",
-                    loop_caption(errors["baseline"], errors["improved"], area),
+                    loop_caption(errors["baseline"], errors["improved"], area, worst),
                 ),
             )
             if steady  # two held-out cycles; a ramp's loop is on its static map

@@ -20,9 +20,11 @@ from brake_hil.physics.rig import load_rig
 from brake_hil.report.diagnosis_figures import (
     TRACES_AREA,
     TRACES_NRMSE,
+    TRACES_WORST,
     loop_area_ratio,
     loop_caption,
     loop_nrmse,
+    loop_worst,
 )
 from brake_hil.report.diagnosis_report import _multiplier_words, nrmse_as_fraction
 from brake_hil.report.embed import DATA_URI_PREFIX
@@ -102,7 +104,16 @@ def test_the_loop_caption_says_when_the_improved_model_does_not_trace_it() -> No
     assert error > TRACES_NRMSE
     caption = loop_caption(0.5, error)
     assert f"does not trace the measured loop here (NRMSE {error:.2g})" in caption
-    assert "traces the measured loop (NRMSE 0.03; it encloses 0.90" in loop_caption(0.5, 0.03, 0.9)
+    assert (
+        "traces the measured loop (NRMSE 0.03, at worst 6 % of its span off; it encloses 0.90"
+        in (loop_caption(0.5, 0.03, 0.9, 0.06))
+    )
+    # a sharp-cornered loop over a rounded one: NRMSE and area held, 10 % off at a corner
+    cornered = loop_caption(0.27, 0.054, 0.88, 0.102)
+    assert "follows the measured loop's extent (NRMSE 0.054) but not its shape" in cornered
+    assert "at worst 10 % of its span off; it encloses 0.88" in cornered
+    square = (np.clip(1.5 * np.cos(phase), -1, 1), np.clip(1.5 * np.sin(phase), -1, 1))
+    assert loop_worst(square, measured) > TRACES_WORST >= loop_worst(measured, measured)
     # a thin seal loop: each coordinate within 3 %, but 0.6 of the area (the energy lost per
     # cycle) is enclosed: the shape is not traced
     lens = (np.cos(phase), np.cos(phase) + 0.2 * np.sin(phase))
