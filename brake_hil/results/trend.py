@@ -48,7 +48,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 import math
-from typing import Final
+from typing import Any, Final
 
 import numpy as np
 
@@ -289,10 +289,7 @@ def _carried_series(
                 values=np.exp(y),
                 used=np.ones(x.shape, dtype=bool),
                 named=np.zeros(x.shape, dtype=bool),
-                slope=fit.slope,
-                interval=fit.interval,
-                intercept=fit.intercept,
-                p_value=fit.p_value,
+                **_line(fit),
                 movement=movement,
                 finding=finding,
                 outside=(),
@@ -301,6 +298,16 @@ def _carried_series(
             )
         )
     return found
+
+
+def _line(fit: _Fit) -> dict[str, Any]:
+    """A series' fitted trend line (its slope, interval, intercept and test), as fields."""
+    return {
+        "slope": fit.slope,
+        "interval": fit.interval,
+        "intercept": fit.intercept,
+        "p_value": fit.p_value,
+    }
 
 
 def _times(rows: Sequence[DiagnosisRow], runs: list[int]) -> IntArray:
@@ -353,10 +360,7 @@ def _value_series(
         used=mask,
         named=np.zeros(mask.shape, dtype=bool),
         band=band,
-        slope=fit.slope,
-        interval=fit.interval,
-        intercept=fit.intercept,
-        p_value=fit.p_value,
+        **_line(fit),
         movement=movement,
         finding=finding,
         outside=outside,
@@ -505,10 +509,7 @@ def _effect_series(name: str, rows: Sequence[DiagnosisRow]) -> Series:
         used=used,
         named=named_mask,
         band=None,
-        slope=fit.slope,
-        interval=fit.interval,
-        intercept=fit.intercept,
-        p_value=fit.p_value,
+        **_line(fit),
         movement=movement,
         finding=finding,
     )

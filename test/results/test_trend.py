@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
 import math
 
@@ -17,6 +18,7 @@ from brake_hil.results.trend import (
     SIGNIFICANCE,
     TREND_RUNS,
     Movement,
+    Series,
     identified,
     rig_trend,
     trends,
@@ -43,6 +45,11 @@ def test_a_steady_rig_gets_no_line_in_at_least_99_percent_of_fleets() -> None:
 
 def _rng(seed: int) -> np.random.Generator:
     return np.random.default_rng(seed)
+
+
+def _alarms(fleet: Callable[[int], list[Run]], said: Callable[[Series], bool]) -> list[int]:
+    """The seeds of 200 fleets whose trend has a series ``said`` holds for."""
+    return [seed for seed in range(200) if any(map(said, rig_trend(rows(fleet(seed))).series))]
 
 
 @pytest.mark.parametrize("seed", range(5))
@@ -193,14 +200,9 @@ def test_no_line_never_says_nothing_left_its_band_when_a_value_did() -> None:
 
 def test_the_outside_rule_rarely_fires_on_steady_fleets() -> None:
     # docs/benchmarks.md has the measured rate (200 steady fleets of 30 runs).
-    alarms = [
-        seed
-        for seed in range(200)
-        if any(
-            s.movement is Movement.OUTSIDE
-            for s in rig_trend(rows(steady_fleet(_rng(seed)))).series
-        )
-    ]
+    alarms = _alarms(
+        lambda seed: steady_fleet(_rng(seed)), lambda s: s.movement is Movement.OUTSIDE
+    )
     assert len(alarms) <= 6, alarms
 
 
@@ -327,14 +329,10 @@ def test_air_collecting_beside_a_named_seal_is_found_with_the_seal_modelled() ->
 
 def test_the_improved_models_steady_air_rarely_gets_a_line() -> None:
     # docs/benchmarks.md has the measured rate (bench_trend_alarms.py, 2000 fleets).
-    alarms = [
-        seed
-        for seed in range(200)
-        if any(
-            s.modelled and s.finding
-            for s in rig_trend(rows(carry_air(_rng(seed + 1), steady_fleet(_rng(seed))))).series
-        )
-    ]
+    alarms = _alarms(
+        lambda seed: carry_air(_rng(seed + 1), steady_fleet(_rng(seed))),
+        lambda s: bool(s.modelled and s.finding),
+    )
     assert len(alarms) <= 2, alarms
 
 
