@@ -14,7 +14,14 @@ import pytest
 PACKAGE = Path(__file__).resolve().parents[1] / "brake_hil"
 
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("brake_hil", "brake_hil.types", "brake_hil.errors", "brake_hil.topics", "brake_hil.files"),
+    (
+        "brake_hil",
+        "brake_hil.types",
+        "brake_hil.errors",
+        "brake_hil.topics",
+        "brake_hil.files",
+        "brake_hil.words",
+    ),
     ("brake_hil.physics",),
     ("brake_hil.analysis",),
     ("brake_hil.diagnosis",),

@@ -493,21 +493,30 @@ def _scored(
 
 
 def _far_off_baselines(
-    results: Mapping[str, ReplayResult], held: Mapping[str, Any] | None
-) -> dict[str, list[str]]:
-    """:func:`far_off` of each baseline.
+    results: Mapping[str, ReplayResult], held: Mapping[str, Any] | None, baseline_path: Path
+) -> tuple[dict[str, list[str]], dict[str, str]]:
+    """:func:`far_off` of each baseline, and the model file its metrics were measured with.
 
-    The results just written (``held`` ``None``), or the stored baseline of each bag replayed.
+    The results just written (``held`` ``None``), or the stored baseline of each bag replayed
+    (its ``model_file``, relative to the baseline's folder, when it names one).
     """
     if held is None:
         metrics = {key: result.metrics for key, result in results.items()}
     else:
         metrics = {key: held[key]["metrics"] for key in results if key in held}
-    return {
+    flagged = {
         key: found
         for key, value in metrics.items()
         if (found := far_off(value, results[key].ptp_spread))
     }
+    stored = held or {}
+    models = {
+        key: os.path.normpath(baseline_path.parent / str(stored[key]["model_file"]))
+        if "model_file" in stored.get(key, {})
+        else str(results[key].model_file)
+        for key in flagged
+    }
+    return flagged, models
 
 
 def run_regression(
@@ -572,13 +581,7 @@ def run_regression(
     checks = compare_with_baseline(results, previous or {})
     if update:
         _write_baseline(baseline_path, results, previous, model_file or stored)
-    flagged = _far_off_baselines(results, None if update else held)
-    measured_with = {
-        key: str(results[key].model_file)
-        if update or "model_file" not in held.get(key, {})
-        else os.path.normpath(baseline_path.parent / str(held[key]["model_file"]))
-        for key in flagged
-    }
+    flagged, measured_with = _far_off_baselines(results, None if update else held, baseline_path)
     sources = {key: plan.sources[bag] for key, (bag, _) in zip(keys, plan.jobs)}
     one_model = model_file or stored
     return Regression(
