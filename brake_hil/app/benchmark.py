@@ -46,6 +46,7 @@ import traceback
 from brake_hil.app.output import check_outputs, write_json
 from brake_hil.app.parallel import SERIAL, Outcome, Workers, parallel_map, values
 from brake_hil.diagnosis.diagnose import diagnose
+from brake_hil.diagnosis.rig_findings import AIR_EFFECT
 from brake_hil.errors import BrakeHilError
 from brake_hil.files import output_file
 from brake_hil.io.opened import open_recording
@@ -60,8 +61,6 @@ MORE_AIR = "more_than_rig_file"
 """``verdict.air.state`` when the diagnosis finds more air than the rig file says."""
 AS_RIG_FILE = "as_rig_file"
 """``verdict.air.state`` when the air named is the rig file's own (no bleeding)."""
-AIR_EFFECT = "entrained_air"
-"""The effect a null with the rig file's own air may name, as the rig file's air."""
 INTERNAL_ERROR = "internal error"
 """How a case's error starts when the diagnosis itself failed on it (a bug, not its input):
 the case is scored as the verdict none and the run goes on; ``brake-hil benchmark`` then

@@ -73,6 +73,8 @@ says, both."""
 ATMOSPHERE = 1.013e5
 """Absolute pressure of gauge zero (Pa), as the entrained_air candidate's."""
 AIR_EFFECT = "entrained_air"
+"""The air's effect: what a null with the rig file's own air may name, and the pair beside a
+single that :func:`air_beside` reads."""
 AIR_VALUES = ("entrained_air", "air_fraction", "bore_compliance")
 """The effect and the calibrated values an air finding is about (the trend's advice)."""
 AS_RIG_FILE = (
