@@ -48,8 +48,6 @@ from brake_hil.diagnosis.thresholds import (
     CHECK_ROUNDS,
     CLEAR_ACCEPT_RATIO,
     CLEAR_EXCESS,
-    CONFIDENCE_OFFSET,
-    CONFIDENCE_SLOPE,
     FORM_RATIO,
     NOISE_EXCESS,
     PAIR_FIT_RATIO,
@@ -66,7 +64,6 @@ from brake_hil.diagnosis.thresholds import (
 )
 from brake_hil.diagnosis.verdict import (
     Verdict,
-    _confidence,
     decide,
     fit_gain,
     fit_score,
@@ -87,8 +84,6 @@ __all__ = [
     "CHECK_ROUNDS",
     "CLEAR_ACCEPT_RATIO",
     "CLEAR_EXCESS",
-    "CONFIDENCE_OFFSET",
-    "CONFIDENCE_SLOPE",
     "FORM_RATIO",
     "NOISE_EXCESS",
     "PAIR_FIT_RATIO",
@@ -107,7 +102,6 @@ __all__ = [
     "Progress",
     "Summary",
     "Verdict",
-    "_confidence",
     "decide",
     "diagnose",
     "held_out_metrics",

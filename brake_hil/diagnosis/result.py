@@ -19,6 +19,7 @@ from brake_hil.diagnosis.groove import GrooveAsymmetry
 from brake_hil.diagnosis.improved_model import ImprovedModel
 from brake_hil.diagnosis.physics_checks import CheckOutcome, unidentified
 from brake_hil.diagnosis.posterior import posterior
+from brake_hil.diagnosis.reliability import traits
 from brake_hil.diagnosis.residual_forms import ResidualDescription
 from brake_hil.diagnosis.summary import Summary
 from brake_hil.diagnosis.thresholds import NOISE_EXCESS
@@ -53,13 +54,13 @@ class Diagnosis:
     unfitted: tuple[str, ...] = ()  # hypotheses left out: not finite where their fit starts
     checks: dict[str, list[CheckOutcome]] = field(default_factory=dict)  # physics checks run
     residual: ResidualDescription | None = None  # what an unexplained misfit looks like
-    confidence_capped: str | None = None  # Verdict.capped: the cap's words, or None
+    confidence_capped: str | None = None  # Verdict.capped: a rule's doubt in words, or None
     rig_values: list[dict[str, object]] = field(default_factory=list)  # rig_findings
     air: dict[str, object] | None = None  # the air against the rig file's (rig_findings)
     groove: GrooveAsymmetry | None = None  # the seal's apply/release asymmetry (stick-slip)
 
     def confidence_text(self) -> str:
-        """The confidence as printed: ``0.83``, or the cap's words (no number) when capped."""
+        """The confidence as printed: ``0.83``, or ``0.41, not sure it is alone``."""
         return confidence_text(self.confidence, self.confidence_capped)
 
     def improved_model(self, rig_path: Path) -> ImprovedModel:
@@ -147,7 +148,11 @@ class Diagnosis:
         }
 
     def _capped(self) -> dict[str, object]:
-        """``confidence_capped`` (and its words) when a rule's fixed cap set the confidence."""
+        """``confidence_capped`` (and its words, ``confidence_cap``) when a rule doubts it.
+
+        The confidence counts the doubt (:mod:`.reliability`); the field names are kept for
+        readers of earlier files, where the doubt held the confidence under a fixed cap.
+        """
         if self.confidence_capped is None:
             return {}
         return {"confidence_capped": True, "confidence_cap": self.confidence_capped}
@@ -225,13 +230,7 @@ def explain(
     doubt = summary.doubt(chosen.effects) if chosen is not None else None
     if doubt is not None:
         explanation += f" Not sure it is alone: {doubt}."
-    if verdict.capped is not None:
-        explanation += (
-            f" How sure: likely, {verdict.capped}; the confidence is that rule's cap, "
-            "not a measured one."
-        )
-    else:
-        explanation += f" {_how_sure(summary, verdict)}"
+    explanation += f" {_how_sure(summary, verdict)}"
     if verdict.effects == ("unexplained",):
         explanation += f" {residual.summary[0].upper()}{residual.summary[1:]}."
     return explanation
@@ -247,12 +246,33 @@ def runner_up(summary: Summary, effects: tuple[str, ...]) -> tuple[str, float] |
 
 
 def _how_sure(summary: Summary, verdict: Verdict) -> str:
-    """The confidence in words: the verdict's posterior share and the next hypothesis's."""
-    text = f"How sure: {verdict.confidence:.2f}, this verdict's share of the posterior"
+    """The confidence in words: what it measures, a rule's doubt, and the runner-up."""
+    t = traits(summary, verdict.effects, verdict.capped is not None, verdict.margin)
+    doubt = f", {verdict.capped}" if verdict.capped is not None else ""
+    factor = math.exp(t.lead)
+    standing = (
+        f"clearing its nearest rival or rule by a factor {factor:.2g}"
+        if factor >= 1.0
+        else f"short of its nearest rival or rule by a factor {1.0 / factor:.2g}"
+    )
+    text = (
+        f"How sure: {verdict.confidence:.2f}{doubt}: how often verdicts like this one "
+        f"({_KIND_WORDS[t.kind]}, {standing}{', doubted by a rule' if t.capped else ''}) "
+        "were right on contract-spanning benchmark cases"
+    )
     rival = runner_up(summary, tuple(verdict.effects))
     if rival is None:
         return text + "."
-    return text + f"; next, {rival[0]} at {rival[1]:.2f}."
+    return text + f"; next by the posterior, {rival[0]} at {rival[1]:.2f}."
+
+
+_KIND_WORDS = {
+    "none": "nothing named",
+    "unexplained": "unexplained",
+    "single": "one effect",
+    "pair": "two effects",
+}
+"""A verdict's kind (:class:`.reliability.VerdictTraits`) in the explanation's words."""
 
 
 def _nothing_named(

@@ -89,9 +89,9 @@ STAND_IN_MARGIN = 0.0
 """Decision margin (log units) a verdict keeps at most when its standing is in doubt.
 
 When a better-scoring hypothesis failed a physics check, or the single named carries another
-physics in its own values (``Candidate.not_alone``): confidence at most about 0.71, and said
-in words, not as a measured number, when the cap binds (``Verdict.capped``). A single a pair
-betters (``Summary.hidden_partner``) is charged that pair's log odds instead.
+physics in its own values (``Candidate.not_alone``): the doubt is said in words
+(``Verdict.capped``) and counted in the confidence (reliability.py). A single a pair betters
+(``Summary.hidden_partner``) is charged that pair's log odds instead.
 Evidence: docs/diagnosis.md.
 """
 SIGNIFICANT_Z = 3.0
@@ -105,24 +105,13 @@ PAIR_SHORTLIST = 8
 """Singles paired with the best single (the next best plausible ones, by score)."""
 PAIR_FIT_RATIO = 1.3
 """Pairs are fitted when the best single cuts the held-out error at least this much."""
-CONFIDENCE_SLOPE = 0.85
-"""Slope of the logistic map from a decision margin (log units) to a ceiling.
-
-Only the ceiling of a capped verdict (``STAND_IN_MARGIN``) is taken from it now: the
-confidence is the posterior share (posterior.py). Evidence: docs/diagnosis.md.
-"""
-CONFIDENCE_OFFSET = 0.9
-"""Offset of that logistic map: the ceiling at margin 0 is about 0.71.
-
-Evidence: docs/diagnosis.md.
-"""
 EFFECTIVE_SAMPLES = 25.0
 """Effectively independent held-out samples of a recording, for the posterior (posterior.py).
 
 The held-out residuals are correlated over a 5 Hz cycle and across the three channels, so a
-recording's thousands of held-out samples weigh as a few tens. The one constant fitted to
-calibrate the confidence: the log-loss of right/wrong verdicts on a family-a set, checked on
-family b and the virtual lab (docs/diagnosis.md).
+recording's thousands of held-out samples weigh as a few tens. Fitted to the log-loss of
+right/wrong verdicts on a family-a set (docs/diagnosis.md); the posterior now ranks the
+runner-up and weighs a pair against its single, and the confidence is reliability.py's.
 """
 PARAMETER_CHARGE = 2.3
 """The Occam factor of one fitted parameter in the posterior (log units; posterior.py).

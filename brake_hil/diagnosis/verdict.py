@@ -6,20 +6,17 @@ docs/diagnosis.md.
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 import math
 
 from brake_hil.diagnosis.candidates import candidate
 from brake_hil.diagnosis.fitting import Fit
-from brake_hil.diagnosis.posterior import posterior
+from brake_hil.diagnosis.reliability import reliability, traits
 from brake_hil.diagnosis.summary import Hypothesis, Summary, plausible, ratio
 from brake_hil.diagnosis.thresholds import (
     ACCEPT_RATIO,
     CLEAR_ACCEPT_RATIO,
     CLEAR_EXCESS,
-    CONFIDENCE_OFFSET,
-    CONFIDENCE_SLOPE,
     FORM_RATIO,
     NOISE_EXCESS,
     PAIR_RATIO,
@@ -75,18 +72,18 @@ class Verdict:
     confidence: float
     chosen: tuple[str, ...] | None  # effects of the hypothesis kept as improved model
     margin: float = math.inf  # the smallest decision margin of the rules (log units)
-    # Why a rule capped the confidence at a fixed value (``STAND_IN_MARGIN``) below what the
-    # evidence gives, in words; None when the confidence is the evidence's own
+    # Why a rule doubts the verdict, in words (its confidence counts it: reliability.py);
+    # None when no rule does
     capped: str | None = None
 
     def confidence_text(self) -> str:
-        """The confidence as printed: a number when measured, the cap's words when capped."""
+        """The confidence as printed: its number, and a rule's doubt in words."""
         return confidence_text(self.confidence, self.capped)
 
 
 def confidence_text(confidence: float, capped: str | None) -> str:
-    """``0.83``, or ``likely, not sure it is alone`` for a capped confidence (no number)."""
-    return f"{confidence:.2f}" if capped is None else f"likely, {capped}"
+    """``0.83``, or ``0.41, not sure it is alone`` when a rule doubts the verdict."""
+    return f"{confidence:.2f}" if capped is None else f"{confidence:.2f}, {capped}"
 
 
 def fit_gain(baseline: Fit, fitted: Fit) -> float:
@@ -227,21 +224,25 @@ def hypothesis_note(summary: Summary, effects: tuple[str, ...], verdict: Verdict
 
 
 def decide(summary: Summary) -> Verdict:
-    """The verdict of :func:`decide_effects`, sure by its posterior share (:mod:`.posterior`).
+    """The verdict of :func:`decide_effects`'s rules, sure as verdicts like it were right.
 
-    Its confidence is the posterior share of the hypothesis it names (none, a single, a
-    pair, ``unexplained``), calibrated by ``EFFECTIVE_SAMPLES``; a verdict a rule doubts
-    (``capped``: a better fit set aside, a single whose own values show another physics) is
-    said in words and held under that rule's cap.
+    Its confidence is :func:`.reliability.reliability` of its traits (its kind, its lead
+    over the best rival, whether a rule doubts it: ``capped``, said in words beside the
+    number): a probability fitted on one family of cases and judged on the others.
     """
-    verdict = decide_effects(summary)
-    share = posterior(summary).of(verdict.effects)
-    ceiling = _confidence(STAND_IN_MARGIN)
-    if verdict.capped in (CAME_CLOSE, MAY_HIDE) and share <= ceiling:
-        verdict = dataclasses.replace(verdict, capped=None)  # the posterior doubts it more
-    if verdict.capped is not None:
-        share = min(share, ceiling)
-    return dataclasses.replace(verdict, confidence=share)
+    return decide_effects(summary)
+
+
+def _verdict(
+    summary: Summary,
+    effects: tuple[str, ...],
+    chosen: tuple[str, ...] | None,
+    margin: float,
+    capped: str | None = None,
+) -> Verdict:
+    """A verdict of the rules with its confidence (:mod:`.reliability`)."""
+    sure = reliability(traits(summary, effects, capped is not None, margin))
+    return Verdict(effects, sure, chosen, margin, capped)
 
 
 def decide_effects(summary: Summary) -> Verdict:
@@ -266,7 +267,7 @@ def decide_effects(summary: Summary) -> Verdict:
         if weak is not None:
             return weak
         margin = math.log(NOISE_EXCESS / max(summary.excess_ratio, 1e-9))
-        return Verdict((), _confidence(margin), None, margin)
+        return _verdict(summary, (), None, margin)
     standing = _Standing.of(summary)
     cap = _caps(summary, standing)
     if standing.chosen is not None:
@@ -427,7 +428,7 @@ def _named(summary: Summary, standing: _Standing, chosen: Hypothesis, cap: _Caps
     else:
         margins += _pair_margins(chosen, own, log_gains)
     least, capped = cap.apply(margins)
-    return Verdict(chosen.effects, _confidence(least), chosen.effects, least, capped)
+    return _verdict(summary, chosen.effects, chosen.effects, least, capped)
 
 
 def _holds(effects: tuple[str, ...], chosen: tuple[str, ...]) -> bool:
@@ -508,7 +509,7 @@ def _not_named(summary: Summary, standing: _Standing, cap: _Caps) -> Verdict:
     effects = ("unexplained",) if unexplained else ()
     if not unexplained and capped is None:
         capped = MAY_HIDE  # above the noise floor (decide_effects): the leftover is unnamed
-    return Verdict(effects, _confidence(margin), None, margin, capped)
+    return _verdict(summary, effects, None, margin, capped)
 
 
 def weak_single(summary: Summary) -> Verdict | None:
@@ -543,7 +544,7 @@ def weak_single(summary: Summary) -> Verdict | None:
         ),
     ]
     least = min(margins)
-    return Verdict(best.effects, _confidence(least), best.effects, least) if least >= 0 else None
+    return _verdict(summary, best.effects, best.effects, least) if least >= 0 else None
 
 
 def identified(summary: Summary, h: Hypothesis) -> bool:
@@ -564,16 +565,3 @@ def identified(summary: Summary, h: Hypothesis) -> bool:
 def required_ratio(summary: Summary) -> float:
     """The held-out improvement a hypothesis must reach to be named."""
     return CLEAR_ACCEPT_RATIO if summary.excess_ratio >= CLEAR_EXCESS else ACCEPT_RATIO
-
-
-def _confidence(margin: float) -> float:
-    """Probability that the verdict is right, from its smallest decision margin (log units).
-
-    ``CONFIDENCE_SLOPE`` and ``CONFIDENCE_OFFSET`` are a logistic regression of right/wrong
-    on the margin over a benchmark of the virtual rig (docs/diagnosis.md).
-    """
-    return _logistic(CONFIDENCE_SLOPE * margin + CONFIDENCE_OFFSET)
-
-
-def _logistic(x: float) -> float:
-    return float(1.0 / (1.0 + math.exp(-x)))

@@ -199,25 +199,34 @@ def nrmse_as_fraction(text: str) -> str:
 
 
 def _confidence_words(diagnosis: Diagnosis, doubt: str | None = None) -> str:
-    """How sure, in words: the CLI's (``likely, ...`` when a rule's cap set it), and its figure."""
+    """How sure, in words: high, moderate or low, its figure, and a rule's doubt.
+
+    The figure is how often verdicts like this one were right (:mod:`.reliability`).
+    """
+    figure = f"confidence {diagnosis.confidence:.2f}: how often verdicts like this one were right"
+    strength = _strength(diagnosis.confidence)
     if diagnosis.confidence_capped is not None:
         return (
-            f"likely, {html.escape(diagnosis.confidence_capped)}: a rule's cap, not a measured "
-            "confidence (what to check, below)"
+            f"{strength} ({figure}), {html.escape(diagnosis.confidence_capped)} "
+            "(what to check, below)"
         )
-    figure = f"confidence {diagnosis.confidence:.2f}"
-    if diagnosis.confidence >= 0.9:
+    if strength == "high":
         return f"high ({figure})"
-    if doubt is not None and diagnosis.confidence >= 0.5:
-        return f"moderate, not sure it is alone ({figure}; what to check, below)"
+    if doubt is not None:
+        return f"{strength}, not sure it is alone ({figure}; what to check, below)"
+    if strength == "low":
+        return f"low ({figure}): treat the verdict as a hint, not a finding"
     rival = runner_up(diagnosis.summary, tuple(diagnosis.effects))
-    if diagnosis.confidence >= 0.7:
-        other = f"{html.escape(rival[0])}, at {rival[1]:.2f}, " if rival else ""
-        return (
-            f"moderate ({figure}): check the runner-up, {other}the next hypothesis by its "
-            "share of the posterior, in the hypotheses table"
-        )
-    return f"low ({figure}): treat the verdict as a hint, not a finding"
+    other = f"{html.escape(rival[0])}, at {rival[1]:.2f}, " if rival else ""
+    return (
+        f"moderate ({figure}): check the runner-up, {other}the next hypothesis by its "
+        "share of the posterior, in the hypotheses table"
+    )
+
+
+def _strength(confidence: float) -> str:
+    """high, moderate or low, as the report's "How sure" says it."""
+    return "high" if confidence >= 0.9 else "moderate" if confidence >= 0.5 else "low"
 
 
 def _nrmse(value: float) -> str:

@@ -68,11 +68,15 @@ class DiagnosisRow:
     def confidence_text(self) -> str:
         """The confidence as the diagnosis said it: a number, or a capped one's words."""
         capped = _CAPPED.search(self.explanation)
-        return confidence_text(self.confidence, capped.group(1) if capped else None)
+        return confidence_text(self.confidence, capped and (capped.group(1) or capped.group(2)))
 
 
-_CAPPED = re.compile(r"How sure: likely, (.+?); the confidence is that rule's cap")
-"""A capped confidence in a stored explanation (:func:`.diagnosis.result.explain`'s words)."""
+_CAPPED = re.compile(
+    r"How sure: (?:likely, (.+?); the confidence is that rule's cap"
+    r"|\d\.\d\d, (.+?): how often verdicts like this one)"
+)
+"""A rule's doubt in a stored explanation (:func:`.diagnosis.result.explain`'s words, as
+written now and by versions that printed a capped confidence as words only)."""
 
 
 @dataclass(frozen=True)

@@ -155,12 +155,13 @@ def test_a_tap_that_rings_too_little_to_show_is_read_through_its_mode(tmp_path: 
     assert reading and reading[0].passed and "p_b" in reading[0].finding, delay.checks
     # The tap is out of the library: "unexplained", or, since the calibration's priors carry
     # every rig tolerance, a library stand-in that the posterior itself all but rules out
-    # (seal_stick_slip at a share under 0.05, "unexplained" next): never a sure wrong name.
+    # ("unexplained" next by the posterior): never a sure wrong name.
     assert tap.residual is not None
     if tap.effects == ("unexplained",):
         assert tap.residual.summary.startswith("unexplained;")
     else:
-        assert tap.confidence < 0.05 and "next, unexplained" in tap.explanation, tap.explanation
+        assert tap.confidence < 0.9, tap.explanation
+        assert "next by the posterior, unexplained" in tap.explanation, tap.explanation
     assert delay.residual is not None
     assert delay.residual.summary.startswith("the calibrated LTI baseline's misfit;")
 
@@ -204,14 +205,14 @@ def test_a_delay_beside_a_hose_is_named_but_not_sure(tmp_path: Path) -> None:
     """A creeping hose beside a late ``p_b``: the delay alone leaves 2 times the noise, so
     the pair can never be named, and ``sensor_delay`` is the verdict. Its fitted delays are
     a skew of ``p_b`` and a common lag of ``F_k`` and ``x_c`` (the hose's), which no one late
-    channel makes: still named, no surer than 0.71, and the explanation says what is beside
-    it. A true late ``F_k`` stays sure."""
-    from brake_hil.diagnosis.diagnose import STAND_IN_MARGIN, _confidence
+    channel makes: still named, doubted in words and less sure, and the explanation says
+    what is beside it. A true late ``F_k`` stays surer, undoubted."""
+    from brake_hil.diagnosis.verdict import NOT_ALONE
     from brake_hil.report.diagnosis_report import write_report
 
     both = _planned_case(tmp_path, "b", 1001, 49, "hose_compliance", "sensor_delay")
     assert both.effects == ("sensor_delay",), both.explanation
-    assert both.confidence <= _confidence(STAND_IN_MARGIN) + 1e-9
+    assert both.confidence_capped == NOT_ALONE
     assert "skew of p_b" in both.summary.not_alone["sensor_delay"]
     assert "Not sure it is alone" in both.explanation and "a hose" in both.explanation
     page = write_report(both, tmp_path / "report").read_text()
@@ -220,7 +221,8 @@ def test_a_delay_beside_a_hose_is_named_but_not_sure(tmp_path: Path) -> None:
     assert isinstance(verdict, dict) and "skew of p_b" in verdict["not_sure_alone"]
     assert "possible_second_effect" not in verdict  # its own values say so, not a pair
     alone = _planned_case(tmp_path, "b", 1001, 14, "sensor_delay")
-    assert alone.effects == ("sensor_delay",) and alone.confidence > 0.9, alone.explanation
+    assert alone.effects == ("sensor_delay",), alone.explanation
+    assert alone.confidence_capped is None and alone.confidence > both.confidence + 0.2
     assert "sensor_delay" not in alone.summary.not_alone
     assert "not_sure_alone" not in alone.as_dict()["verdict"]
 
@@ -247,15 +249,19 @@ def test_a_subtle_second_effect_under_a_strong_one_leaves_the_verdict_unsure(
     """An eccentric load with a little entrained air: the eccentric load alone cuts the
     error so much that a pair with it can never be named (``PAIR_SHARE``); unfitted, those
     pairs would leave the verdict at 0.90. Fitted after all, the pair with the air cuts what
-    the eccentric load leaves 2.7 times: the eccentric load is still named, no surer than
-    0.71, and the verdict names the effect beside it: the air's signature, even harmonics of
+    the eccentric load leaves 2.7 times: the eccentric load is still named, doubted, and the
+    verdict names the effect beside it: the air's signature, even harmonics of
     ``p_b`` beyond their scatter and the noise, is seen though ``p_b`` misses by under 1 %;
     the pairs stay charged as unnameable."""
-    from brake_hil.diagnosis.diagnose import STAND_IN_MARGIN, _confidence
+    import dataclasses
+
+    from brake_hil.diagnosis.verdict import decide
 
     result = _planned_case(tmp_path, "a", 1501, 244, "eccentric_load", "entrained_air")
     assert result.effects == ("eccentric_load",), result.explanation
-    assert result.confidence <= _confidence(STAND_IN_MARGIN) + 1e-9
+    unpaired = decide(dataclasses.replace(result.summary, pairs=()))
+    assert result.confidence < unpaired.confidence - 0.2, result.explanation
+    assert "Not sure it is alone" in result.explanation
     assert ("eccentric_load", "entrained_air") in result.summary.pairs_ruled_out
     assert ("eccentric_load", "entrained_air") in {p.effects for p in result.summary.pairs}
     verdict = result.as_dict()["verdict"]

@@ -142,17 +142,19 @@ def test_next_steps_without_named_physics_run_no_improved_model(tmp_path: Path) 
     assert "run_chain" not in steps and "no improved model to run live" in steps
 
 
-def test_a_capped_confidence_is_said_in_words_not_as_a_number() -> None:
+def test_a_doubted_confidence_is_said_with_its_number_and_what_it_means() -> None:
     from types import SimpleNamespace
 
     from brake_hil.report.diagnosis_report import _confidence_words
 
     measured = SimpleNamespace(confidence=0.9312, confidence_capped=None)
-    capped = SimpleNamespace(confidence=0.711, confidence_capped="not sure it is alone")
-    assert _confidence_words(measured) == "high (confidence 0.93)"  # type: ignore[arg-type]
+    capped = SimpleNamespace(confidence=0.41, confidence_capped="not sure it is alone")
+    assert _confidence_words(measured) == (  # type: ignore[arg-type]
+        "high (confidence 0.93: how often verdicts like this one were right)"
+    )
     words = _confidence_words(capped)  # type: ignore[arg-type]
-    assert words.startswith("likely, not sure it is alone: a rule's cap")  # as the CLI says
-    assert not re.search(r"\d", words)
+    assert words.startswith("low (confidence 0.41: how often verdicts like this one were right)")
+    assert "not sure it is alone" in words
 
 
 def test_the_reports_runner_up_is_the_explanations_next_hypothesis() -> None:

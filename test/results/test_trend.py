@@ -336,18 +336,27 @@ def test_the_improved_models_steady_air_rarely_gets_a_line() -> None:
     assert len(alarms) <= 2, alarms
 
 
-def test_a_capped_confidence_is_said_in_words_in_the_runs_table() -> None:
+def test_a_doubted_confidence_is_said_in_words_in_the_runs_table() -> None:
     from brake_hil.report.trend_report import _runs_table
 
     base = rows(steady_fleet(_rng(12), 3))
-    capped = replace(
+    older = replace(
         base[0],
         confidence=0.711,
         explanation="seal_stick_slip: ... How sure: likely, not sure it is alone; the "
         "confidence is that rule's cap, not a measured one.",
     )
-    measured = replace(base[1], confidence=0.87, explanation="... How sure: 0.87, this ...")
-    assert capped.confidence_text == "likely, not sure it is alone"
+    doubted = replace(
+        base[1],
+        confidence=0.41,
+        explanation="seal_stick_slip: ... How sure: 0.41, not sure it is alone: how often "
+        "verdicts like this one (one effect, 3.2 times the best rival's cut) were right ...",
+    )
+    measured = replace(
+        base[2], confidence=0.87, explanation="... How sure: 0.87: how often verdicts ..."
+    )
+    assert older.confidence_text == "0.71, not sure it is alone"
+    assert doubted.confidence_text == "0.41, not sure it is alone"
     assert measured.confidence_text == "0.87"
-    table = _runs_table(rig_trend([capped, measured, base[2]]))
-    assert "<td>likely, not sure it is alone</td>" in table and "0.71" not in table
+    table = _runs_table(rig_trend([older, doubted, measured]))
+    assert "<td>0.41, not sure it is alone</td>" in table and "<td>0.87</td>" in table
