@@ -16,9 +16,6 @@ of the summary and is in the decision itself, for every hypothesis:
   constant is the same at every pressure level; and as tightly as the candidate's physics
   says (``Candidate.segments_disagree``: a delay that shrinks with amplitude is not a
   delay).
-* **Leftover** (:func:`leftover_check`): what it leaves on a channel is not a generic form
-  its physics leaves no room for (``Candidate.leaves_no``: a delayed channel does not ring),
-  cutting that channel's held-out error ``LEFTOVER_RATIO`` times.
 * **Rivals** (:func:`rival_check`): physics outside the library that this one may stand in
   for (``Candidate.rivals``: a delayed channel may be read through a resonant tap, a hose's lag
   may be a late ``p_i``), fitted in its place with the calibration refitted, either does not
@@ -52,7 +49,6 @@ from brake_hil.diagnosis.candidates import candidate, own_columns
 from brake_hil.diagnosis.dataset import Dataset
 from brake_hil.diagnosis.fitting import Fit, Model, fit
 from brake_hil.diagnosis.groove import seal_asymmetry
-from brake_hil.diagnosis.residual_forms import FORMS, baseline_predictions, describe_residual
 from brake_hil.errors import FitError
 from brake_hil.physics.catalogue import entry
 from brake_hil.topics import OUTPUT_CHANNELS
@@ -60,7 +56,6 @@ from brake_hil.topics import OUTPUT_CHANNELS
 __all__ = [
     "FREED_WIDENING",
     "IDENTIFIABLE_SHARE",
-    "LEFTOVER_RATIO",
     "OWN_VALUE_SIGMAS",
     "PRIOR_WIDENING",
     "SEGMENT_SIGMAS",
@@ -70,20 +65,12 @@ __all__ = [
     "asymmetry_check",
     "channel_check",
     "check_hypothesis",
-    "leftover_check",
     "prior_check",
     "rival_check",
     "segment_check",
     "unidentified",
 ]
 
-LEFTOVER_RATIO = 2.0
-"""Cut of what a hypothesis leaves on a channel, by a form its physics leaves no room for,
-that marks it a stand-in (``ACCEPT_RATIO``: as much as a candidate must cut to be named).
-
-A real effect leaves noise there; a stand-in leaves the structure of the physics it stands in
-for. Evidence: docs/diagnosis.md.
-"""
 UNREACHED_SHARE = 0.8
 """Share of the removed error on channels the effect does not reach that marks a stand-in."""
 SEGMENT_SIGMAS = 4.0
@@ -123,7 +110,7 @@ SEGMENT_ITERATIONS = 8
 class CheckOutcome:
     """One check's result: passed, and what it found in words."""
 
-    name: str  # asymmetry, channels, leftover, rivals, segments or wider_priors
+    name: str  # asymmetry, channels, rivals, segments or wider_priors
     passed: bool
     finding: str
 
@@ -225,30 +212,6 @@ def segment_check(model: Model, hypothesis: Fit) -> CheckOutcome:
             if finding is not None:
                 return CheckOutcome("segments", False, finding)
     return CheckOutcome("segments", True, f"its parameters agree over {len(per_segment)} segments")
-
-
-def leftover_check(model: Model, hypothesis: Fit) -> CheckOutcome:
-    """What the hypothesis leaves is not a form its physics leaves no room for."""
-    rules: dict[str, list[str]] = {}  # form -> channels
-    for member, own in own_columns(model.candidates, hypothesis.theta):
-        for channel, form in member.leaves_no(own).items():
-            rules.setdefault(form, []).append(channel)
-    if not rules:
-        return CheckOutcome("leftover", True, "nothing its physics rules out")
-    forms = tuple(f for f in FORMS if f.name in rules)
-    predictions = baseline_predictions(model, hypothesis.theta)
-    left = describe_residual(model.dataset, predictions, forms=forms)
-    for fitted in left.forms:
-        if fitted.channel in rules[fitted.form] and fitted.channel_improvement >= LEFTOVER_RATIO:
-            return CheckOutcome(
-                "leftover",
-                False,
-                f"what it leaves on {fitted.channel} is {fitted.description}, cutting that "
-                f"channel's error {fitted.channel_improvement:.1f} times more: its physics "
-                f"leaves no room for that",
-            )
-    shown = ", ".join(f"{form} of {', '.join(channels)}" for form, channels in rules.items())
-    return CheckOutcome("leftover", True, f"no {shown} in what it leaves")
 
 
 def rival_check(model: Model, hypothesis: Fit) -> CheckOutcome:
@@ -422,8 +385,6 @@ def check_hypothesis(
         return [asymmetry]
     outcomes = [*([asymmetry] if asymmetry else []), channel_check(baseline, hypothesis)]
     model = Model(calibration, [candidate(e) for e in hypothesis.effects], dataset)
-    if outcomes[-1].passed:
-        outcomes.append(leftover_check(model, hypothesis))
     if outcomes[-1].passed:
         outcomes.append(rival_check(model, hypothesis))
     if outcomes[-1].passed:

@@ -100,44 +100,44 @@ def _planned_case(tmp_path: Path, family: str, seed: int, number: int, *effects:
 
 def test_a_load_cells_hysteresis_is_not_named_a_sensor_delay(tmp_path: Path) -> None:
     """Family b's load-cell hysteresis (out of the library) fits as a delay of a few tenths of
-    a millisecond, but one that shrinks as the amplitude grows, and what it leaves rings: a
-    physics check sets the delay aside (a delay is a time) and the verdict does not name it
+    a millisecond, but one that shrinks as the amplitude grows: a physics check sets the
+    delay aside (a delay is a time) and the verdict does not name it
     (without the check, the case drawn here was named sensor_delay at about 0.74). With the
     caliper's force area calibrated, the delay no longer comes near here: no library effect
     is named (``unexplained``, the out-of-library truth)."""
     result = _planned_case(tmp_path, "b", 701, 24, "force_sensor_hysteresis")
     assert result.effects in (("unexplained",), ()), result.explanation
     findings = [c.finding for c in result.checks.get("sensor_delay", []) if not c.passed]
-    # when the delay is checked, it is set aside by the leftover check (what the delay leaves
-    # on F_k rings), or, were that passed, by the segments check (the skew shrinks as the
-    # amplitude grows)
+    # when the delay is checked, it is set aside by the segments check (the skew shrinks as
+    # the amplitude grows) or by its rival (F_k read through a mode explains it as well)
     assert "sensor_delay" not in result.checks or any(
-        "a delay is the same at every amplitude" in f or "its physics leaves no room" in f
+        "a delay is the same at every amplitude" in f or "explains it as well" in f
         for f in findings
     ), result.checks
 
 
 def test_a_resonant_pressure_tap_is_not_named_a_sensor_delay(tmp_path: Path) -> None:
     """Family b's pressure tap (out of the library: p_b read through a 17 Hz mode) lags p_b
-    at the pulsing's frequency, so a delay of p_b cuts the error; but what the delay leaves
-    on p_b rings, and the leftover check sets it aside (without the check it would be named
-    sensor_delay at about 0.66). A true delay of x_c leaves no ring and is still named."""
+    at the pulsing's frequency, so a delay of p_b cuts the error; but p_b read through a
+    lightly damped mode of its own, with the calibration refitted, explains it better, and
+    the rival check sets the delay aside (without the check it would be named sensor_delay).
+    A true delay of x_c is told from its mode and is still named."""
     tap = _planned_case(tmp_path, "b", 702, 51, "pressure_tap_resonance")
     assert "sensor_delay" not in tap.effects, tap.explanation
     findings = [c.finding for c in tap.checks.get("sensor_delay", []) if not c.passed]
-    assert any("what it leaves on p_b is a resonance" in f for f in findings), tap.checks
+    assert any("p_b read through a mode" in f for f in findings), tap.checks
     delay = _planned_case(tmp_path, "b", 703, 1, "sensor_delay")
     assert delay.effects == ("sensor_delay",), delay.explanation
-    leftover = [c for c in delay.checks["sensor_delay"] if c.name == "leftover"]
-    assert leftover and leftover[0].passed and "x_c" in leftover[0].finding
+    rivals = [c for c in delay.checks["sensor_delay"] if c.name == "rivals"]
+    assert rivals and rivals[0].passed and "x_c" in rivals[0].finding, delay.checks
 
 
 def test_a_tap_that_rings_too_little_to_show_is_read_through_its_mode(tmp_path: Path) -> None:
-    """A subtle pressure tap (p_b read through a 36 Hz mode, damping 0.12) leaves nothing
-    the leftover check sees once p_b is delayed 3.2 ms (and the seal's damping doubled to
-    match its 2 % gain); without the rival check it would be named ``sensor_delay`` at about
-    0.78. Read through a mode of its own, with
-    the calibration refitted, p_b fits better at the tap's frequency and damping, and the
+    """A subtle pressure tap (p_b read through a 36 Hz mode, damping 0.12) rings too little
+    to show once p_b is delayed 3.2 ms (and the seal's damping doubled to match its 2 %
+    gain); without the rival check it would be named ``sensor_delay`` at about 0.78. Read
+    through a mode of its own, with the calibration refitted, p_b fits better at the tap's
+    frequency and damping, and the
     delay is set aside. A true delay of p_b (a Butterworth chain, 3.4 ms) reads as
     well through a well-damped mode only, and is still named."""
     from brake_hil.diagnosis.candidates.resonant_reading import LIGHT_DAMPING

@@ -189,15 +189,6 @@ class Candidate:
         """
         return None
 
-    def leaves_no(self, theta: FloatArray) -> dict[str, str]:
-        """Generic forms (by name, :mod:`..residual_forms`) its physics leaves no room for.
-
-        Channel -> form: fitted with ``theta`` (its own parameters), what the hypothesis leaves
-        on that channel must not be that form (the leftover check of ``physics_checks``).
-        Default: nothing to check.
-        """
-        return {}
-
     def rivals(self, theta: FloatArray) -> tuple[Rival, ...]:
         """Physics outside the library that this one, fitted with ``theta``, may stand in for.
 

@@ -104,16 +104,6 @@ class SensorDelay(Candidate):
             )
         return None
 
-    def leaves_no(self, theta: FloatArray) -> dict[str, str]:
-        """A skewed channel must not ring: a delay shifts it in time, with unit gain.
-
-        A transducer read through a resonant tapping line lags at the pulsing's frequency
-        too, but its reading rings after each edge; what the delay leaves on that channel is
-        then a mode (``resonance``).
-        """
-        skews = _skews(theta)
-        return {c: "resonance" for c, skew in zip(CHANNELS, skews) if abs(skew) > SKEW_THRESHOLD}
-
     def rivals(self, theta: FloatArray) -> tuple[Rival, ...]:
         """The most skewed channel, when skewed, read through a mode of its own.
 
