@@ -18,6 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 import math
 
+from brake_hil.diagnosis.candidates import candidate
 from brake_hil.diagnosis.summary import Summary, ratio
 
 __all__ = [
@@ -26,15 +27,16 @@ __all__ = [
     "LEAD_LIMITS",
     "LEAD_LOG_ODDS",
     "VerdictTraits",
+    "holds",
     "reliability",
     "traits",
 ]
 
 KIND_LOG_ODDS: dict[str, float] = {
-    "none": -0.18,
-    "unexplained": 0.13,
-    "single": 1.23,
-    "pair": -0.65,
+    "none": -0.19,
+    "unexplained": 0.15,
+    "single": 1.22,
+    "pair": -0.64,
 }
 """Log odds of a verdict of each kind being right at lead 0, not doubted.
 
@@ -42,7 +44,7 @@ Fitted (``benchmarks/bench_confidence.py``, 140 family-a verdicts): a single is 
 often than a pair (one member lost or added) or a none (weak effects under the noise).
 docs/diagnosis.md.
 """
-LEAD_LOG_ODDS = 0.39
+LEAD_LOG_ODDS = 0.38
 """Log odds gained per unit of lead (log held-out cut over the best rival's). Fitted."""
 CAPPED_LOG_ODDS = -1.54
 """Log odds of a verdict a rule doubts (``Verdict.capped``) against one it does not. Fitted."""
@@ -70,7 +72,8 @@ def traits(
 
     Its own cut: none's is 1, ``unexplained``'s the best generic form's
     (:attr:`Summary.form_gain`), a named hypothesis's its held-out cut. Its rivals: every
-    fitted hypothesis sharing none of its effects, and none (a cut of 1) for a named one.
+    fitted hypothesis sharing none of its effects and not holding it as a special case, and
+    none (a cut of 1) for a named one.
     """
     fitted = {
         h.effects: ratio(summary.baseline_cost, h.held_out_cost)
@@ -82,7 +85,9 @@ def traits(
         kind, own = "unexplained", max(summary.form_gain, 1.0)
     else:
         kind, own = ("single" if len(effects) == 1 else "pair"), fitted.get(effects, 1.0)
-    rivals = [cut for e, cut in fitted.items() if not set(e) & set(effects)]
+    rivals = [
+        cut for e, cut in fitted.items() if not set(e) & set(effects) and not holds(e, effects)
+    ]
     if effects:
         rivals.append(1.0)
     low, high = LEAD_LIMITS
@@ -90,6 +95,15 @@ def traits(
     if kind in ("single", "pair"):
         lead = min(lead, margin)
     return VerdictTraits(kind, min(max(lead, low), high), capped)
+
+
+def holds(effects: tuple[str, ...], chosen: tuple[str, ...]) -> bool:
+    """A single whose law holds the single ``chosen`` as a special case (``contains``).
+
+    It is no rival of ``chosen``: fitting as well, it is ``chosen`` (the groove at ``a = 0``
+    is plain stick-slip; what it resolves of its asymmetry is said apart, ``groove.py``).
+    """
+    return len(effects) == len(chosen) == 1 and chosen[0] in candidate(effects[0]).contains
 
 
 def reliability(

@@ -9,9 +9,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 import math
 
-from brake_hil.diagnosis.candidates import candidate
 from brake_hil.diagnosis.fitting import Fit
-from brake_hil.diagnosis.reliability import reliability, traits
+from brake_hil.diagnosis.reliability import holds, reliability, traits
 from brake_hil.diagnosis.summary import Hypothesis, Summary, plausible, ratio
 from brake_hil.diagnosis.thresholds import (
     ACCEPT_RATIO,
@@ -420,7 +419,7 @@ def _named(summary: Summary, standing: _Standing, chosen: Hypothesis, cap: _Caps
     rivals = [
         g
         for effects, g in log_gains.items()
-        if not set(effects) & set(chosen.effects) and not _holds(effects, chosen.effects)
+        if not set(effects) & set(chosen.effects) and not holds(effects, chosen.effects)
     ]
     margins = [own - max(rivals, default=0.0), own - math.log(standing.required)]
     if len(chosen.effects) == 1:
@@ -429,15 +428,6 @@ def _named(summary: Summary, standing: _Standing, chosen: Hypothesis, cap: _Caps
         margins += _pair_margins(chosen, own, log_gains)
     least, capped = cap.apply(margins)
     return _verdict(summary, chosen.effects, chosen.effects, least, capped)
-
-
-def _holds(effects: tuple[str, ...], chosen: tuple[str, ...]) -> bool:
-    """A single whose law holds the single ``chosen`` as a special case (``contains``).
-
-    It is no rival of ``chosen``: fitting as well, it is ``chosen`` (the groove at ``a = 0``
-    is plain stick-slip; what it resolves of its asymmetry is said apart, ``groove.py``).
-    """
-    return len(effects) == len(chosen) == 1 and chosen[0] in candidate(effects[0]).contains
 
 
 def _single_margins(
