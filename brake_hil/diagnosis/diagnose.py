@@ -340,6 +340,7 @@ def _decide_with_pairs(
             form_gains,
             left,
             air,
+            fits.dataset.steady,
         )
 
     summary = summary_of(pairs)

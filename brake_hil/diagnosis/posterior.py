@@ -1,4 +1,4 @@
-"""The posterior share of every fitted hypothesis, and the verdict's confidence from it (pure).
+"""The posterior share of every fitted hypothesis (pure): the runner-up, a pair's odds.
 
 Each hypothesis (none: the calibrated baseline; each single; each pair; ``unexplained``: the
 best generic form of the baseline's misfit) is scored by its held-out log-likelihood under a
@@ -10,8 +10,8 @@ parameter's prior width over the width the recording pins it to). A cost under t
 (:attr:`.summary.Summary.floor_cost`) counts as that share: no model predicts the held-out
 noise. The posterior share of a hypothesis is its likelihood times its prior over the sum
 of all; the prior gives each kind (none, a single, a pair, unexplained) a quarter, shared
-equally among the library's singles, and among all pairs of them. The verdict's
-confidence is the share of the hypotheses that make it right.
+equally among the library's singles, and among all pairs of them. It names the runner-up
+and weighs a pair against its single; the verdict's confidence is :mod:`.reliability`'s.
 docs/diagnosis.md.
 """
 

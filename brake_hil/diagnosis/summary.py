@@ -62,6 +62,8 @@ class Summary:
     form_gains: dict[str, float] = field(default_factory=dict)  # "form channel": improvement
     # single -> (air over the rig file's, cut of the single's error) of its pair with air
     air_beside: dict[str, tuple[float, float]] = field(default_factory=dict)
+    # every window steady pulsing at the rig's frequency, as the confidence was fitted on
+    steady: bool = True
 
     def form_bar(self, effects: tuple[str, ...]) -> float:
         """The best generic form's improvement that counts against ``effects``.
@@ -248,6 +250,7 @@ class Summary:
                 str(k): (float(v[0]), float(v[1]))
                 for k, v in document.get("air_beside", {}).items()
             },
+            steady=bool(document.get("steady", True)),
         )
 
 
@@ -271,13 +274,15 @@ def summarise(
     form_gains: dict[str, float] | None = None,
     even_left: dict[str, tuple[float, float, float]] | None = None,
     air_beside: dict[str, tuple[float, float]] | None = None,
+    steady: bool = True,
 ) -> Summary:
     """The decision's inputs from the fits.
 
     Also the pairs left unfitted as unnameable, the best generic form's held-out
-    improvement (:mod:`.residual_forms`), and the singles a signature they leave says are
+    improvement (:mod:`.residual_forms`), the singles a signature they leave says are
     not alone (``even_left``: the even harmonics of ``p_b`` each single's fit leaves,
-    :func:`unmade_signature`).
+    :func:`unmade_signature`), and whether the recording is steady pulsing only
+    (:attr:`.dataset.Dataset.steady`).
     """
 
     def hypothesis(h: Fit) -> Hypothesis:
@@ -309,6 +314,7 @@ def summarise(
         form_gain=max((form_gains or {}).values(), default=1.0),
         form_gains=dict(form_gains or {}),
         air_beside=dict(air_beside or {}),
+        steady=steady,
     )
 
 

@@ -113,3 +113,25 @@ def test_the_weights_fitted_by_the_benchmark_recover_a_known_law() -> None:
     for low, high in ((0.1, 0.3), (0.4, 0.6), (0.7, 0.9)):
         inside = [ok for p, ok in rows if low <= p < high]
         assert len(inside) > 100 and low - 0.05 <= float(np.mean(inside)) <= high + 0.05
+
+
+def test_off_steady_pulsing_the_confidence_says_it_was_not_fitted_there() -> None:
+    """The weights were fitted on steady pulsing: on a sweep, a ramp or a procedure the same
+    verdict is said with that doubt, and less sure; the flag replays through JSON, and a
+    summary stored without it is steady pulsing, as every earlier one was."""
+    import dataclasses
+    import json
+
+    from brake_hil.diagnosis.verdict import OFF_PULSING
+
+    s = summary(fitted(40.0, "orifice_flow"), fitted(5.0, "thermal_drift"))
+    off = dataclasses.replace(s, steady=False)
+    assert decide(off).effects == decide(s).effects
+    assert decide(off).capped == OFF_PULSING and decide(s).capped is None
+    assert decide(off).confidence < decide(s).confidence - 0.2
+    assert decide(Summary.from_dict(json.loads(json.dumps(off.as_dict())))) == decide(off)
+    stored = {k: v for k, v in s.as_dict().items() if k != "steady"}
+    assert Summary.from_dict(stored).steady
+    quiet = dataclasses.replace(summary(fitted(1.1, "orifice_flow")), noise_cost=BASE / 2)
+    nothing = dataclasses.replace(quiet, steady=False)  # none under the noise floor
+    assert decide(nothing).effects == () and decide(nothing).capped == OFF_PULSING
