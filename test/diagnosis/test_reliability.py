@@ -20,20 +20,7 @@ from brake_hil.diagnosis.reliability import (
 )
 from brake_hil.diagnosis.summary import Hypothesis, Summary
 from brake_hil.diagnosis.verdict import NOT_ALONE, decide
-
-BASE = 1.0e-5
-
-
-def summary(*hypotheses: Hypothesis, form_gain: float = 1.0) -> Summary:
-    return Summary(
-        baseline_cost=BASE,
-        baseline_window_costs=(BASE,) * 3,
-        baseline_rms=BASE**0.5,
-        noise_cost=BASE / 100,
-        singles=tuple(h for h in hypotheses if len(h.effects) == 1),
-        pairs=tuple(h for h in hypotheses if len(h.effects) == 2),
-        form_gain=form_gain,
-    )
+from test.diagnosis.test_decide import BASE, summary
 
 
 def fitted(cut: float, *effects: str) -> Hypothesis:
@@ -46,8 +33,8 @@ def test_the_lead_is_the_verdicts_cut_over_its_best_rival_sharing_no_effect() ->
         fitted(5.0, "thermal_drift"),
         fitted(15.0, "orifice_flow", "thermal_drift"),  # shares an effect: no rival
         fitted(2.0, "entrained_air", "thermal_drift"),
-        form_gain=3.0,
     )
+    s = Summary(**{**s.__dict__, "form_gain": 3.0})
     single = traits(s, ("orifice_flow",), False, margin=math.inf)
     assert single.kind == "single" and single.lead == pytest.approx(math.log(10.0 / 5.0))
     pair = traits(s, ("orifice_flow", "thermal_drift"), False, margin=math.inf)
