@@ -49,7 +49,7 @@ LEAD_LOG_ODDS = 0.38
 CAPPED_LOG_ODDS = -1.54
 """Log odds of a verdict a rule doubts (``Verdict.capped``) against one it does not. Fitted."""
 LEAD_LIMITS = (-3.0, 5.0)
-"""The lead is held within these (log units: 20 times under to 150 times over the rival's
+"""A verdict's lead is held within these (log units: 20 times under to 150 times over the rival's
 cut), so a lead far beyond those of the verdicts fitted on is not carried past them."""
 
 
