@@ -11,8 +11,12 @@ the hose wall's Young's modulus (its swelling is the part of ``C_b`` that does n
 with pressure; left out, a 10 % error in it was named hose_compliance on null recordings),
 and the caliper's force area ``A_eb`` (the share of the pressure force the caliper body sees:
 the piston diameter and the bore's area ratio, 10 % each, move it by up to a fifth; left out,
-that share was named ``eccentric_load`` on null recordings and beside the right effect).
-Every other toleranced rig value that reaches the model (bore length, piston diameter, the
+that share was named ``eccentric_load`` on null recordings and beside the right effect),
+and the pistons' area ``A_ep`` (the piston diameter's 10 % is a fifth of the area, and of the
+pressure force ``F_k`` reads; held at the rig file's, such a rig was named stick-slip or
+``unexplained``). Beyond one tolerance a multiplier's prior steepens
+(``BEYOND_TOLERANCE_SLOPE``): the contract's rig values lie within their tolerances. Every
+other toleranced rig value that reaches the model (bore length, piston diameter, the
 bore's area ratio, fluid bulk modulus, line geometry, viscosity ...) is carried into the prior
 (:mod:`.tolerance_prior`): the prior of the multipliers is the covariance its tolerances give
 them (the bore's volume widens the hose wall's and the air's priors, which together set
@@ -64,16 +68,16 @@ UNCERTAIN = (
     Uncertain("air_fraction", "fluid.air_fraction", 0.3),
     Uncertain("hose_stiffness", "hose.youngs_modulus", 0.0),
     Uncertain("bore_area", "bore.area_ratio", 0.0),
+    Uncertain("piston_area", "pistons.diameter", 0.0),
 )
 BORE_COMPLIANCE = Uncertain("bore_compliance", "fluid.air_fraction", 0.3)
 """Replaces ``air_fraction`` when the rig file overrides ``C_b``."""
 PROPAGATED: tuple[Uncertain, ...] = ()
 """Calibrated too when their tolerance matters to the recording (``HOLD_BELOW``): none. Freed,
-the bore chamber's volume (``bore_volume``), the piston area (``piston_area``), the line
-inertance stood in for the hose's distributed compliance (the bundled hose recording came
-out eccentric_load with the bore volume at 1.75 and the piston area at 1.52) and for the seals'
-stick-slip; their rig values' tolerances are carried into the six multipliers' prior instead
-(the bore length into the hose wall's and the air's, which together set ``C_b``)."""
+the bore chamber's volume (``bore_volume``) and the line inertance stood in for the hose's
+distributed compliance and for the seals' stick-slip; their rig values' tolerances are carried
+into the other multipliers' prior instead (the bore length into the hose wall's and the air's,
+which together set ``C_b``)."""
 RIG_VALUES = ("valve_resistance", "air_fraction", "hose_stiffness", "bore_volume", "piston_area")
 """Multipliers applied by hand (the rest multiply ModelParameters fields)."""
 MODEL_KEYS = {
@@ -87,6 +91,13 @@ MODEL_KEYS = {
     "bore_area": "A_eb_over_A_ep",
 }
 """The ``model:`` key that overrides each calibrated quantity outright (docs/interface.md)."""
+BEYOND_TOLERANCE_SLOPE = 4.0
+"""Slope of a multiplier's prior residual beyond one tolerance (sigmas per sigma).
+
+The contract puts a rig value anywhere within its tolerance and seldom beyond: a calibration
+that moves a value past it pays this many times as steeply (two tolerances out cost as five
+sigmas), so several values pushed past their tolerances together (larger pistons with a
+stiffer seal) cannot stand in for a physics the rig file leaves out (a hose's compliance)."""
 HOLD_BELOW = 1.0
 """A propagated quantity whose one-sigma move changes the data cost by less than this (one
 prior sigma's worth) cannot be told by the recording: it is held at the rig file's value (its
@@ -147,8 +158,6 @@ def apply_multipliers(rig: Rig, mean_pressure: float, m: dict[str, float]) -> Mo
     if "air_fraction" in m:
         fluid = replace(rig.fluid, air_fraction=rig.fluid.air_fraction * m["air_fraction"])
         rig = replace(rig, fluid=fluid)
-    if m.get("piston_area", 1.0) != 1.0:  # the pistons' and the bore's section together
-        m = {**m, "bore_area": m["piston_area"]}
     if "hose_stiffness" in m:
         hose = replace(rig.hose, youngs_modulus=rig.hose.youngs_modulus * m["hose_stiffness"])
         rig = replace(rig, hose=hose)
@@ -160,8 +169,9 @@ def apply_multipliers(rig: Rig, mean_pressure: float, m: dict[str, float]) -> Mo
         changes["bore_compliance"] = (
             nominal.bore_compliance * m["bore_volume"] * m.get("bore_compliance", 1.0)
         )
-    if "piston_area" in m:
+    if "piston_area" in m:  # the pistons' section: A_ep, and A_eb = (A_eb / A_ep) A_ep
         changes["piston_area"] = nominal.piston_area * m["piston_area"]
+        changes["bore_area"] = changes.get("bore_area", nominal.bore_area) * m["piston_area"]
     if "valve_resistance" in m:
         valve = rig.model_overrides.get("R_v", rig.needle_valve_resistance)
         changes["line_resistance"] = nominal.line_resistance + valve * (m["valve_resistance"] - 1)
@@ -188,6 +198,17 @@ def simulate_lti(dataset: Dataset, params: ModelParameters) -> dict[str, FloatAr
     """The LTI model's outputs on the dataset's input."""
     outputs = simulate_batch(ModelSpec((params,)), dataset.pressure, dataset.sample_time)[0]
     return dict(zip(OUTPUT_CHANNELS, outputs))
+
+
+def prior_residual(white: FloatArray) -> FloatArray:
+    """The prior's residual of whitened log-multipliers (continuous at one tolerance).
+
+    Within one tolerance the values themselves, ``BEYOND_TOLERANCE_SLOPE`` times as steep beyond.
+    """
+    size = np.abs(white)
+    beyond = np.sign(white) * (1.0 + BEYOND_TOLERANCE_SLOPE * (size - 1.0))
+    result: FloatArray = np.where(size <= 1.0, white, beyond)
+    return result
 
 
 def whitening(covariance: FloatArray) -> FloatArray:
@@ -259,7 +280,8 @@ def calibrate(dataset: Dataset, rig: Rig) -> Calibration:
     white = whitening(covariance)
 
     def residuals(log_m: FloatArray) -> FloatArray:
-        return np.concatenate([data_term(dict(zip(names, np.exp(log_m)))), white @ log_m])
+        data = data_term(dict(zip(names, np.exp(log_m))))
+        return np.concatenate([data, prior_residual(white @ log_m)])
 
     fit = scipy.optimize.least_squares(
         residuals,

@@ -17,7 +17,12 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.optimize
 
-from brake_hil.diagnosis.calibration import MODEL_ERROR, Calibration, apply_multipliers
+from brake_hil.diagnosis.calibration import (
+    MODEL_ERROR,
+    Calibration,
+    apply_multipliers,
+    prior_residual,
+)
 from brake_hil.diagnosis.candidates.base import (
     Candidate,
     Context,
@@ -381,7 +386,7 @@ class _Search:
         thetas = np.array([_from_search(model, r) for r in points])
         data = model.residuals(model.dataset.train, thetas, FIT_SPAN, FIT_DECIMATION)
         data = data / (MODEL_ERROR * np.sqrt(data.shape[1]))
-        return np.hstack([data, points[:, self.own :] @ self.whiten.T])
+        return np.hstack([data, prior_residual(points[:, self.own :] @ self.whiten.T)])
 
     def evaluate(self, x: FloatArray) -> FloatArray:
         """:meth:`objective` of :meth:`rows` of ``x``, cached."""

@@ -45,5 +45,10 @@ VALUE_LABELS: Final[Mapping[str, ValueLabel]] = {
         "check the piston diameter and the caliper's seating (uneven load)",
         "the share of the pressure force the caliper body sees",
     ),
+    "piston_area": ValueLabel(
+        "piston area A_ep",
+        "check the piston diameter in the rig file",
+        "the pistons' section: the pressure force on the pads, the fluid each stroke moves",
+    ),
 }
 """Every value the calibration may fit, by its name (a test holds it to the calibration)."""
