@@ -14,8 +14,8 @@ the piston diameter and the bore's area ratio, 10 % each, move it by up to a fif
 that share was named ``eccentric_load`` on null recordings and beside the right effect),
 and the pistons' area ``A_ep`` (the piston diameter's 10 % is a fifth of the area, and of the
 pressure force ``F_k`` reads; held at the rig file's, such a rig was named stick-slip or
-``unexplained``). Beyond one tolerance a multiplier's prior steepens
-(``BEYOND_TOLERANCE_SLOPE``): the contract's rig values lie within their tolerances. Every
+``unexplained``). Beyond two tolerances a multiplier's prior steepens
+(``BEYOND_TOLERANCE_SLOPE``): a tolerance is one standard deviation. Every
 other toleranced rig value that reaches the model (bore length, piston diameter, the
 bore's area ratio, fluid bulk modulus, line geometry, viscosity ...) is carried into the prior
 (:mod:`.tolerance_prior`): the prior of the multipliers is the covariance its tolerances give
@@ -92,12 +92,14 @@ MODEL_KEYS = {
 }
 """The ``model:`` key that overrides each calibrated quantity outright (docs/interface.md)."""
 BEYOND_TOLERANCE_SLOPE = 4.0
-"""Slope of a multiplier's prior residual beyond one tolerance (sigmas per sigma).
+"""Slope of a multiplier's prior residual beyond ``PRIOR_EDGE`` (sigmas per sigma).
 
-The contract puts a rig value anywhere within its tolerance and seldom beyond: a calibration
-that moves a value past it pays this many times as steeply (two tolerances out cost as five
-sigmas), so several values pushed past their tolerances together (larger pistons with a
-stiffer seal) cannot stand in for a physics the rig file leaves out (a hose's compliance)."""
+A tolerance is one standard deviation (docs/interface.md), so a rig lies within two of them
+but seldom beyond: a calibration that moves a value past that pays this many times as
+steeply (three sigmas out cost as six), so several values pushed far together (larger pistons
+with a stiffer seal) cannot stand in for a physics the rig file leaves out (a hose)."""
+PRIOR_EDGE = 2.0
+"""Prior sigmas (whitened) within which the prior is the tolerances' Gaussian: 95 % of rigs."""
 HOLD_BELOW = 1.0
 """A propagated quantity whose one-sigma move changes the data cost by less than this (one
 prior sigma's worth) cannot be told by the recording: it is held at the rig file's value (its
@@ -201,13 +203,14 @@ def simulate_lti(dataset: Dataset, params: ModelParameters) -> dict[str, FloatAr
 
 
 def prior_residual(white: FloatArray) -> FloatArray:
-    """The prior's residual of whitened log-multipliers (continuous at one tolerance).
+    """The prior's residual of whitened log-multipliers (continuous at ``PRIOR_EDGE``).
 
-    Within one tolerance the values themselves, ``BEYOND_TOLERANCE_SLOPE`` times as steep beyond.
+    Within ``PRIOR_EDGE`` the values themselves, ``BEYOND_TOLERANCE_SLOPE`` times as steep beyond.
     """
     size = np.abs(white)
-    beyond = np.sign(white) * (1.0 + BEYOND_TOLERANCE_SLOPE * (size - 1.0))
-    result: FloatArray = np.where(size <= 1.0, white, beyond)
+    edge = PRIOR_EDGE
+    beyond = np.sign(white) * (edge + BEYOND_TOLERANCE_SLOPE * (size - edge))
+    result: FloatArray = np.where(size <= edge, white, beyond)
     return result
 
 

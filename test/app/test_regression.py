@@ -169,8 +169,8 @@ def test_far_off_is_a_ptp_ratio_past_twice_what_the_rig_files_tolerances_allow()
 
 def test_the_ptp_spread_is_the_rig_files_tolerances_pushed_through_the_model() -> None:
     """A restricted valve sets the caliper's amplitude, so its ±40 % widens the F_k ptp's
-    spread well past the open rig's; a rig file that says every value is known exactly
-    (tolerance 0) allows none."""
+    spread past the open rig's (both carry the pistons' area, a fifth of the force); a rig
+    file that says every value is known exactly (tolerance 0) allows none."""
     spreads = {}
     for name in ("one_washer_open", "one_washer_restricted"):
         bag = PROJECT / "bags" / name
@@ -179,7 +179,8 @@ def test_the_ptp_spread_is_the_rig_files_tolerances_pushed_through_the_model() -
         )
     open_valve, restricted = spreads["one_washer_open"], spreads["one_washer_restricted"]
     assert all(value > 1.0 for value in (*open_valve.values(), *restricted.values()))
-    assert restricted["F_k"] > 2.0 * open_valve["F_k"]
+    assert restricted["F_k"] > 1.4 * open_valve["F_k"]
+    assert open_valve["F_k"] > 15.0  # the piston diameter's 10 % is a fifth of the area
     exact = load_rig(RIG)
     exact = replace(exact, tolerances={u.tolerance_key: 0.0 for u in UNCERTAIN})
     assert ptp_spread(read_recording(BAG), exact) == {"p_b": 0.0, "F_k": 0.0, "x_c": 0.0}

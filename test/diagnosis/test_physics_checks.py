@@ -36,6 +36,21 @@ def test_an_improvement_spread_over_channels_passes() -> None:
     assert channel_check(BASELINE, pair).passed
 
 
+def test_an_effect_that_mends_its_own_channels_too_passes_where_the_baseline_missed_another() -> (
+    None
+):
+    """The bundled sweep of a stick-slip seal: the baseline's calibration, bent to follow the
+    seal, misses p_b most (NRMSE 0.108 against F_k 0.040 and x_c 0.021); the seal's fit,
+    its calibration straightened, removes 85 % of its error on p_b, yet cuts the error of
+    F_k and x_c 31 times: a real effect, not a stand-in."""
+    baseline = _fit((), {"p_b": 0.108, "F_k": 0.040, "x_c": 0.021})
+    seal = _fit(("seal_stick_slip",), {"p_b": 0.0103, "F_k": 0.0060, "x_c": 0.0055})
+    outcome = channel_check(baseline, seal)
+    assert outcome.passed and "falls 30.8 times" in outcome.finding, outcome.finding
+    stand_in = _fit(("seal_stick_slip",), {"p_b": 0.0103, "F_k": 0.032, "x_c": 0.017})
+    assert not channel_check(baseline, stand_in).passed
+
+
 def test_the_farthest_rig_value_is_counted_from_the_rig_file_in_tolerance_sigmas() -> None:
     """A freed baseline's factors multiply the calibrated values; sigmas are the prior's."""
     from types import SimpleNamespace

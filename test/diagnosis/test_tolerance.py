@@ -206,21 +206,17 @@ def test_a_piston_diameter_within_its_tolerance_leaves_the_baseline_at_the_noise
     assert baseline.held_out_cost < 4.0 * dataset.noise_cost()
 
 
-def test_the_prior_steepens_beyond_one_tolerance() -> None:
-    """Within a tolerance the prior is the Gaussian's; past it each sigma costs
-    ``BEYOND_TOLERANCE_SLOPE`` times as much, with no jump at the edge."""
-    from brake_hil.diagnosis.calibration import BEYOND_TOLERANCE_SLOPE, prior_residual
+def test_the_prior_steepens_beyond_two_tolerances() -> None:
+    """Within ``PRIOR_EDGE`` sigmas the prior is the tolerances' Gaussian; past it each sigma
+    costs ``BEYOND_TOLERANCE_SLOPE`` times as much, with no jump at the edge."""
+    from brake_hil.diagnosis.calibration import (
+        BEYOND_TOLERANCE_SLOPE,
+        PRIOR_EDGE,
+        prior_residual,
+    )
 
-    white = np.array([-2.0, -1.0, -0.5, 0.0, 0.5, 1.0, 1.0 + 1e-9, 2.0])
-    expected = [
-        -1.0 - BEYOND_TOLERANCE_SLOPE,
-        -1.0,
-        -0.5,
-        0.0,
-        0.5,
-        1.0,
-        1.0,
-        1.0 + BEYOND_TOLERANCE_SLOPE,
-    ]
+    edge, slope = PRIOR_EDGE, BEYOND_TOLERANCE_SLOPE
+    white = np.array([-edge - 1.0, -edge, -1.0, 0.0, 1.0, edge, edge + 1e-9, edge + 1.0])
+    expected = [-edge - slope, -edge, -1.0, 0.0, 1.0, edge, edge, edge + slope]
     assert prior_residual(white) == pytest.approx(expected, abs=1e-6)
-    assert BEYOND_TOLERANCE_SLOPE > 1.0
+    assert slope > 1.0 and edge >= 1.0
