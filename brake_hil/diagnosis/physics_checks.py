@@ -155,13 +155,6 @@ def channel_check(baseline: Fit, hypothesis: Fit) -> CheckOutcome:
     total = sum(drops.values())
     elsewhere = [key for key in OUTPUT_CHANNELS if key not in reached]
     share = sum(drops[key] for key in elsewhere) / total if total > 0 else 0.0
-    own_cut, other_cut = (
-        ratio(
-            sum(baseline.held_out_rms[k] ** 2 for k in keys),
-            sum(hypothesis.held_out_rms[k] ** 2 for k in keys),
-        )
-        for keys in (sorted(reached & set(OUTPUT_CHANNELS)), elsewhere)
-    )
     if share < UNREACHED_SHARE:
         return CheckOutcome(
             "channels",
@@ -169,6 +162,13 @@ def channel_check(baseline: Fit, hypothesis: Fit) -> CheckOutcome:
             f"{100 * (1 - share):.0f} % of the error removed is on "
             f"{', '.join(sorted(reached))}, which its physics reaches",
         )
+    own_cut, other_cut = (
+        ratio(
+            sum(baseline.held_out_rms[k] ** 2 for k in keys),
+            sum(hypothesis.held_out_rms[k] ** 2 for k in keys),
+        )
+        for keys in ([k for k in OUTPUT_CHANNELS if k in reached], elsewhere)
+    )
     if own_cut >= ACCEPT_RATIO:
         return CheckOutcome(
             "channels",
