@@ -36,7 +36,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import scipy.optimize
 
-from brake_hil.diagnosis.dataset import Dataset, Window
+from brake_hil.diagnosis.dataset import Dataset, Window, read_as_measured, read_where_held
 from brake_hil.diagnosis.engine import ModelSpec, simulate_batch
 from brake_hil.diagnosis.tolerance_prior import KEY_FIELDS, prior_covariance
 from brake_hil.physics.parameters import ModelParameters, derive_parameters
@@ -192,13 +192,17 @@ def window_residuals(
         inside = dataset.mask((window,))
         predicted = predict(window)
         for key in OUTPUT_CHANNELS:
-            parts.append((predicted[key][inside] - dataset.measured[key][inside]) / scale[key])
+            measured = dataset.measured[key][inside]
+            read = read_as_measured(predicted[key][inside], measured, window, key)
+            parts.append((read - measured) / scale[key])
     return np.concatenate(parts)
 
 
 def simulate_lti(dataset: Dataset, params: ModelParameters) -> dict[str, FloatArray]:
     """The LTI model's outputs on the dataset's input."""
     outputs = simulate_batch(ModelSpec((params,)), dataset.pressure, dataset.sample_time)[0]
+    if dataset.held:
+        outputs = read_where_held(outputs, dataset.held, 1.0 / dataset.sample_time)
     return dict(zip(OUTPUT_CHANNELS, outputs))
 
 

@@ -28,7 +28,7 @@ its Nyquist frequency).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.interpolate import CubicSpline  # type: ignore[import-untyped]
@@ -36,8 +36,10 @@ from scipy.interpolate import CubicSpline  # type: ignore[import-untyped]
 from brake_hil.analysis import signals
 from brake_hil.analysis.comparison import conditioned_channels
 from brake_hil.analysis.recording import Recording
+from brake_hil.analysis.saturation import Held, held_limits
 from brake_hil.analysis.segmentation import Segment, find_segments
 from brake_hil.errors import SignalError
+from brake_hil.physics.measurement import SENSORS
 from brake_hil.physics.rig import Rig
 from brake_hil.topics import OUTPUT_CHANNELS
 from brake_hil.types import FloatArray
@@ -55,6 +57,22 @@ identified (its release stiffness came out unbounded on the bundled ramp)."""
 LEAD_IN_S = 6.0
 """A window that is not pulsing is simulated from up to this long before it (s), so that
 its history (the rise before a fall, the ramp before a sweep) is in its prediction."""
+ZERO_LEVELLED_KINDS = frozenset({"steady", "pulsing", "sweep", "modulated"})
+"""Window kinds over which the bore pressure's zero may sit off the master cylinder's
+(``ZERO_STABILITY``): over whole cycles a mean offset carries no dynamics (the seed's
+Table 4-5 metrics are peak-to-peak and phase). A ramp keeps its levels: its static map and
+its loop's gap are what it shows."""
+ZERO_STABILITY = 1e-3
+"""How far (share of the full scale) a pressure transducer's zero may wander in a recording.
+
+Zeroed before the run, a strain-gauge or piezoresistive transducer drifts by its thermal
+zero shift (0.01-0.02 % of full scale per kelvin on a datasheet) over a few kelvin: 0.1 %
+of the seed rig's 6.9 MPa range is 6.9 kPa, a few times the sensor noise yet tens of times
+the noise of the 30 Hz conditioned channels. Over whole cycles ``p_b``'s mean equals
+``p_i``'s in every model (no flow at rest; the candidates' flows average to zero), so their
+mean difference within this bound is taken as the two zeros'; beyond it the rest stays in
+the residual (a zero shift, a leak). ``F_k`` and ``x_c`` keep their levels: a seal's rest
+position and the groove's creep show there."""
 NOISE_BAND_HZ = 150.0
 """The raw channels above this frequency hold noise alone (no segment kind reaches it): the
 estimate of the noise where nothing repeats (:func:`noise_variances`)."""
@@ -89,6 +107,7 @@ class Dataset:
     sample_time: float  # s
     noise_variance: dict[str, float] | None = None  # conditioned noise (no steady window)
     found: tuple[Segment, ...] = ()  # every segment of the recording (segmentation)
+    held: dict[str, Held] = field(default_factory=dict)  # outputs held at a range's end
 
     def mask(self, windows: tuple[Window, ...]) -> FloatArray:
         """Boolean mask of the samples inside ``windows``."""
@@ -203,7 +222,28 @@ def prepare(recording: Recording, rig: Rig) -> Dataset:
         sample_time=float(np.median(np.diff(time))),
         noise_variance=None if steady else noise_variances(recording),
         found=tuple(found),
+        held=held_channels(recording, segments),
     )
+
+
+def held_channels(recording: Recording, windows: list[Window]) -> dict[str, Held]:
+    """The outputs held at a range's end inside ``windows``, with the share held there.
+
+    :func:`held_limits` of each output of ``recording``; one held outside the windows only
+    (a gauge pressure at zero while idle) is left out.
+    """
+    inside = np.zeros(recording.time.size, dtype=bool)
+    for window in windows:
+        inside |= (recording.time >= window.start) & (recording.time < window.end)
+    found = {}
+    for key, values in recording.measured().items():
+        held = held_limits(np.asarray(values, dtype=float)) if values is not None else None
+        if held is not None:
+            part = np.asarray(values, dtype=float)[inside]
+            share = float(np.mean((part <= held.low) | (part >= held.high))) if part.size else 0
+            if share > 0.0:
+                found[key] = held._replace(share=share)
+    return found
 
 
 def _usable(segment: Segment) -> bool:
@@ -262,6 +302,47 @@ def split(segments: list[Window]) -> tuple[tuple[Window, ...], tuple[Window, ...
         )
         held_out.append(replace(window, start=cut, lead_in=lead))
     return tuple(train), tuple(held_out)
+
+
+def read_as_measured(
+    predicted: FloatArray, measured: FloatArray, window: Window, channel: str
+) -> FloatArray:
+    """``predicted`` (..., n) on ``measured``'s (n) zero over ``window``.
+
+    For ``p_b`` over a kind in ``ZERO_LEVELLED_KINDS`` the prediction is shifted by the mean
+    of ``measured - predicted`` along the last axis (each row apart), clipped to the zero's
+    wander ``ZERO_STABILITY`` of the channel's full scale (:data:`SENSORS`); other channels
+    and kinds are returned as they are.
+    """
+    if window.kind not in ZERO_LEVELLED_KINDS or measured.size == 0 or channel != "p_b":
+        return predicted
+    sensor = SENSORS[channel]
+    bound = ZERO_STABILITY * (sensor.high - sensor.low)
+    offset = np.clip(np.mean(measured - predicted, axis=-1, keepdims=True), -bound, bound)
+    return np.asarray(predicted + offset, dtype=float)
+
+
+def read_where_held(outputs: FloatArray, held: dict[str, Held], rate: float) -> FloatArray:
+    """Simulated outputs (..., 3, n) read through the ends a held channel reached.
+
+    Each channel in ``held`` is cut at its ends, and the cut is conditioned as the measured
+    channel was (the seed's 30 Hz zero-phase low-pass, :func:`signals.lowpass`): the measured
+    channel, filtered after its cut, rounds the cut's corners, while the prediction is of the
+    conditioned input and needs no second filter where it is not cut. Other channels are
+    returned as they are.
+    """
+    from scipy import signal as sps  # type: ignore[import-untyped]
+
+    read = np.array(outputs, dtype=float)
+    for c, key in enumerate(OUTPUT_CHANNELS):
+        limits = held.get(key)
+        if limits is None or read.shape[-1] < 16:
+            continue
+        sos = sps.butter(3, 30.0, btype="lowpass", fs=rate, output="sos")
+        uncut = read[..., c, :]
+        cut = np.clip(uncut, limits.low, limits.high) - uncut
+        read[..., c, :] = uncut + sps.sosfiltfilt(sos, cut, axis=-1)
+    return read
 
 
 def noise_variances(recording: Recording) -> dict[str, float]:

@@ -28,6 +28,7 @@ import numpy as np
 from brake_hil.analysis import segment_metrics, signals
 from brake_hil.analysis.characterization import characterize
 from brake_hil.analysis.recording import Recording
+from brake_hil.analysis.saturation import Held
 from brake_hil.diagnosis import segment_evidence
 from brake_hil.diagnosis.calibration import Calibration, calibrate
 from brake_hil.diagnosis.candidates import CANDIDATES, candidate
@@ -255,12 +256,37 @@ tell more than the recording holds (:func:`segment_evidence.missing`)."""
 
 
 def _with_advice(explanation: str, verdict: Verdict, dataset: Dataset) -> str:
-    """``explanation`` with the excitations that would decide, when the verdict is unsure."""
+    """``explanation`` with what it cannot settle: the excitations that would decide.
+
+    Those when the verdict is unsure; then the channels held at a range's end
+    (:func:`held_sentences`), always.
+    """
     advice = segment_evidence.missing(dataset)
     unsure = verdict.confidence < ADVICE_BELOW or verdict.effects == ("unexplained",)
-    if not advice or not unsure:
-        return explanation
-    return f"{explanation} This recording holds too little to be sure: {'; '.join(advice)}."
+    if advice and unsure:
+        explanation = (
+            f"{explanation} This recording holds too little to be sure: {'; '.join(advice)}."
+        )
+    return " ".join([explanation, *held_sentences(dataset.held)])
+
+
+HELD_UNITS = {"p_b": (1e-6, "MPa"), "F_k": (1e-3, "kN"), "x_c": (1e6, "um")}
+"""How a held channel's end is said: factor from SI and unit."""
+
+
+def held_sentences(held: dict[str, Held]) -> list[str]:
+    """A sentence per output held at a range's end (:func:`saturation.held_limits`)."""
+    sentences = []
+    for key, limits in held.items():
+        factor, unit = HELD_UNITS.get(key, (1.0, "SI"))
+        ends = [f"{factor * v:.1f} {unit}" for v in (limits.low, limits.high) if np.isfinite(v)]
+        sentences.append(
+            f"{key} is held at {' and '.join(ends)} in {100 * limits.share:.1f} % of the samples "
+            "diagnosed: "
+            "its transducer (or the DAQ) reached the end of its range there; every model is "
+            f"compared as {key} reads, cut at that end. Widen the range and test again."
+        )
+    return sentences
 
 
 @dataclass

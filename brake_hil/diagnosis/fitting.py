@@ -30,7 +30,7 @@ from brake_hil.diagnosis.candidates.base import (
     own_columns,
     rig_context,
 )
-from brake_hil.diagnosis.dataset import Dataset, Window
+from brake_hil.diagnosis.dataset import Dataset, Window, read_as_measured, read_where_held
 from brake_hil.diagnosis.engine import ModelSpec, simulate_batch
 from brake_hil.errors import FitError
 from brake_hil.topics import OUTPUT_CHANNELS
@@ -203,11 +203,25 @@ class Model:
             start_time=starts,
             pressure_ceiling=self.pressure_ceiling,
         )
+        if ds.held:
+            outputs = read_where_held(outputs, ds.held, 1.0 / ds.sample_time)
         result = []
         for k, (first, last, inside) in enumerate(spans):
             part = outputs[k * batch : (k + 1) * batch, :, : last - first]
-            result.append((part[:, :, inside], np.arange(first, last)[inside]))
+            index = np.arange(first, last)[inside]
+            result.append((self._as_read(windows[k], part[:, :, inside], index), index))
         return result
+
+    def _as_read(self, window: Window, outputs: FloatArray, index: IndexArray) -> FloatArray:
+        """``outputs`` (B, 3, n) as the transducers read them (:func:`read_as_measured`)."""
+        measured = self.dataset.measured
+        return np.stack(
+            [
+                read_as_measured(outputs[:, c], measured[key][index], window, key)
+                for c, key in enumerate(OUTPUT_CHANNELS)
+            ],
+            axis=1,
+        )
 
     def simulate(
         self, window: Window, theta: FloatArray, span: float | None = None
@@ -222,7 +236,10 @@ class Model:
             start_time=float(ds.time[first]),
             pressure_ceiling=self.pressure_ceiling,
         )
-        return outputs[:, :, inside], np.arange(first, last)[inside]
+        if ds.held:
+            outputs = read_where_held(outputs, ds.held, 1.0 / ds.sample_time)
+        index = np.arange(first, last)[inside]
+        return self._as_read(window, outputs[:, :, inside], index), index
 
     def residuals(
         self,

@@ -42,7 +42,7 @@ VALUE_LABELS: Final[Mapping[str, ValueLabel]] = {
     "hose_stiffness": ValueLabel("hose wall modulus", "hose ageing or a new hose"),
     "bore_area": ValueLabel(
         "caliper force area A_eb",
-        "check the piston diameter and the caliper's seating (uneven load)",
+        "check the bore's area ratio in the rig file and the caliper's seating (uneven load)",
         "the share of the pressure force the caliper body sees",
     ),
     "piston_area": ValueLabel(
