@@ -331,17 +331,14 @@ def read_where_held(outputs: FloatArray, held: dict[str, Held], rate: float) -> 
     conditioned input and needs no second filter where it is not cut. Other channels are
     returned as they are.
     """
-    from scipy import signal as sps  # type: ignore[import-untyped]
-
     read = np.array(outputs, dtype=float)
     for c, key in enumerate(OUTPUT_CHANNELS):
         limits = held.get(key)
-        if limits is None or read.shape[-1] < 16:
+        if limits is None or read.shape[-1] < 32:
             continue
-        sos = sps.butter(3, 30.0, btype="lowpass", fs=rate, output="sos")
         uncut = read[..., c, :]
         cut = np.clip(uncut, limits.low, limits.high) - uncut
-        read[..., c, :] = uncut + sps.sosfiltfilt(sos, cut, axis=-1)
+        read[..., c, :] = uncut + np.apply_along_axis(signals.lowpass, -1, cut, rate)
     return read
 
 
