@@ -26,6 +26,7 @@ from brake_hil.diagnosis.candidates import CANDIDATES
 from brake_hil.diagnosis.diagnose import (
     Diagnosis,
     Verdict,
+    held_sentences,
     hypothesis_note,
     ratio,
 )
@@ -282,7 +283,7 @@ def _summary(diagnosis: Diagnosis, findings: list[Finding]) -> str:
 
 
 def _rig_checks(diagnosis: Diagnosis, findings: list[Finding]) -> list[str]:
-    """What to check on the rig (HTML items): the effects' rig checks, the doubt, the file."""
+    """What to check on the rig (HTML items): effects, doubt, rig file, outputs held."""
     effects = tuple(e for e in diagnosis.effects if e in CATALOGUE)
     doubt = diagnosis.summary.doubt(effects) if effects else None
     air = diagnosis.air
@@ -297,6 +298,7 @@ def _rig_checks(diagnosis: Diagnosis, findings: list[Finding]) -> list[str]:
     named = {str(v["quantity"]) for v in diagnosis.rig_values}
     checks += [f"a rig value far outside its tolerance: {v['text']}" for v in diagnosis.rig_values]
     checks += [f.words for f in findings if f.name not in named]
+    checks += held_sentences(diagnosis.dataset.held)
     return [_text(c) for c in checks]
 
 

@@ -6,6 +6,7 @@ report read as a test engineer reads it; the words' helpers alone below it.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 import re
@@ -37,7 +38,8 @@ from test.conftest import CONFIG, PROJECT
 
 @pytest.fixture(scope="module")
 def report(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
-    """A hose recording diagnosed; the output folder and the page's HTML."""
+    """A hose recording whose x_c probe reached the end of its range, diagnosed; the output
+    folder and the page's HTML."""
     root = tmp_path_factory.mktemp("report")
     rig = load_rig(CONFIG / "rig_default.yaml")
     run = simulate_rig(
@@ -47,7 +49,11 @@ def report(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
         seed=3,
     )
     recording = root / "hose"
-    save_recording(recording, run.as_recording())
+    measured = run.as_recording()
+    assert measured.caliper_displacement is not None
+    end = 0.9 * float(np.min(measured.caliper_displacement))
+    held = np.maximum(measured.caliper_displacement, end)
+    save_recording(recording, dataclasses.replace(measured, caliper_displacement=held))
     shutil.copy(CONFIG / "rig_default.yaml", root / "rig.yaml")
     out = root / "out"
     result = run_diagnose(recording, root / "rig.yaml", out)
@@ -81,6 +87,10 @@ def test_next_steps_give_the_command_to_run_the_improved_model_live(
     recording = out.parent / "hose"
     assert f"bash scripts/run_chain.sh {recording} --model {out / 'improved_model.json'}" in steps
     assert "the hose" in steps  # the catalogue's rig check
+    start = page.index("<b>What to check on the rig:</b>")
+    checks = page[start : page.index("<h2>", start)]
+    assert re.search(r"x_c is held at -\d+\.\d um in \d+\.\d % of the samples", checks)
+    assert "Widen the range and test again" in steps
     assert "brake-hil diagnose NEW_RECORDING" in steps and "brake-hil regress" in steps
 
 
