@@ -43,7 +43,14 @@ from brake_hil.diagnosis.residual_forms import (
 )
 from brake_hil.diagnosis.result import Diagnosis, Metrics, explain
 from brake_hil.diagnosis.rig_findings import air_beside, for_verdict
-from brake_hil.diagnosis.summary import Hypothesis, Summary, plausible, ratio, summarise
+from brake_hil.diagnosis.summary import (
+    Hypothesis,
+    Summary,
+    own_values_outside,
+    plausible,
+    ratio,
+    summarise,
+)
 from brake_hil.diagnosis.thresholds import (
     ACCEPT_RATIO,
     CHECK_ROUNDS,
@@ -64,6 +71,7 @@ from brake_hil.diagnosis.thresholds import (
     WINDOW_FLOOR,
 )
 from brake_hil.diagnosis.verdict import (
+    AS_RIG_VALUE,
     Verdict,
     decide,
     fit_gain,
@@ -219,8 +227,7 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         verdict.effects,
         float(np.mean([w.mean_pressure for w in dataset.train])),
     )
-    explanation = f"{words} {explanation}" if words and not verdict.effects else explanation
-    explanation = f"{explanation} {words}" if words and verdict.effects else explanation
+    explanation = _with_rig_values(explanation, words, verdict)
     explanation = _with_advice(explanation, verdict, dataset)
     if verdict.effects != ("unexplained",):
         # the description is of the baseline's misfit, which the verdict explains or not
@@ -248,6 +255,21 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         air=air,
         groove=groove,
     )
+
+
+def _with_rig_values(explanation: str, words: str, verdict: Verdict) -> str:
+    """``explanation`` with the rig values' and the air's sentence (:func:`for_verdict`).
+
+    Before it when nothing is named; after it otherwise, as "also", but for the rig value a
+    verdict is carried as (``AS_RIG_VALUE``), which is its ground.
+    """
+    if not words:
+        return explanation
+    if not verdict.effects:
+        return f"{words} {explanation}"
+    if verdict.capped == AS_RIG_VALUE:
+        words = words.replace("Also a rig value", "A rig value", 1)
+    return f"{explanation} {words}"
 
 
 ADVICE_BELOW = 0.5
@@ -367,6 +389,7 @@ def _decide_with_pairs(
             left,
             air,
             fits.dataset.steady,
+            own_values_outside(fits.calibration),
         )
 
     summary = summary_of(pairs)

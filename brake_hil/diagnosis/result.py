@@ -23,7 +23,13 @@ from brake_hil.diagnosis.reliability import traits
 from brake_hil.diagnosis.residual_forms import ResidualDescription
 from brake_hil.diagnosis.summary import Summary
 from brake_hil.diagnosis.thresholds import NOISE_EXCESS
-from brake_hil.diagnosis.verdict import Verdict, confidence_text, fit_gain, fit_score
+from brake_hil.diagnosis.verdict import (
+    AS_RIG_VALUE,
+    Verdict,
+    confidence_text,
+    fit_gain,
+    fit_score,
+)
 from brake_hil.words import noise_times
 
 __all__ = ["Diagnosis", "explain"]
@@ -207,7 +213,10 @@ def explain(
     """
     baseline, chosen, best = fits
     baseline_metrics, improved_metrics = metrics
-    if chosen is None:
+    by_value = verdict.capped == AS_RIG_VALUE
+    if by_value:
+        explanation = _as_rig_value(summary, verdict, baseline_metrics)
+    elif chosen is None:
         explanation = _nothing_named(summary, verdict, baseline, best, baseline_metrics)
     else:
         explanation = _explain(baseline, chosen, evidence, baseline_metrics, improved_metrics)
@@ -220,9 +229,11 @@ def explain(
             )
     if groove is not None and chosen is not None:
         explanation += f" Seal: {groove.verdict_words(chosen.effects)}"
-    if summary.stand_ins:
-        first, finding = next(iter(summary.stand_ins.items()))
-        others = [e.replace("+", " + ") for e in list(summary.stand_ins)[1:]]
+    # a verdict carried as its rig value is not its candidate's fit, which a check may refuse
+    shown = {k: v for k, v in summary.stand_ins.items() if not (by_value and k in verdict.effects)}
+    if shown:
+        first, finding = next(iter(shown.items()))
+        others = [e.replace("+", " + ") for e in list(shown)[1:]]
         also = f"; also {', '.join(others)} (the report's physics checks)" if others else ""
         explanation += (
             f" Set aside by a physics check, {first.replace('+', ' and ')}: {finding}{also}."
@@ -273,6 +284,18 @@ _KIND_WORDS = {
     "pair": "two effects",
 }
 """A verdict's kind (:class:`.reliability.VerdictTraits`) in the explanation's words."""
+
+
+def _as_rig_value(summary: Summary, verdict: Verdict, baseline_metrics: Metrics) -> str:
+    """The words of an effect named as the calibrated model carries it (``AS_RIG_VALUE``)."""
+    worst_nrmse = max(m["nrmse"] for m in baseline_metrics.values())
+    (effect,) = verdict.effects
+    return (
+        f"{effect}: the calibrated LTI model fits the recording (NRMSE on the held-out cycles "
+        f"at most {worst_nrmse:.4f}, {noise_times(summary.excess_ratio)}) only with "
+        f"{effect}'s own rig value outside its tolerance, moved the way {effect} moves it "
+        "(the rig value below); the improved model is that calibrated model, which carries it."
+    )
 
 
 def _nothing_named(

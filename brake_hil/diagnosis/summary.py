@@ -10,11 +10,14 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
+import numpy as np
+
+from brake_hil.diagnosis.calibration import Calibration
 from brake_hil.diagnosis.candidates import CANDIDATES, candidate, own_columns
 from brake_hil.diagnosis.evidence import Evidence
 from brake_hil.diagnosis.fitting import Fit
 from brake_hil.diagnosis.likelihood import log_evidence, log_prior
-from brake_hil.diagnosis.rig_findings import AIR_BESIDE_CUT, AIR_MORE_RATIO
+from brake_hil.diagnosis.rig_findings import AIR_BESIDE_CUT, AIR_MORE_RATIO, outside
 from brake_hil.diagnosis.thresholds import NOISE_EXCESS, PAIR_SHARE, SIGNIFICANT_Z
 from brake_hil.words import energy_share, noise_times
 
@@ -22,6 +25,7 @@ __all__ = [
     "Hypothesis",
     "Summary",
     "not_alone",
+    "own_values_outside",
     "plausible",
     "ratio",
     "summarise",
@@ -64,6 +68,9 @@ class Summary:
     air_beside: dict[str, tuple[float, float]] = field(default_factory=dict)
     # every window steady pulsing at the rig's frequency, as the confidence was fitted on
     steady: bool = True
+    # effects whose own rig value the calibrated baseline moved outside its tolerance, the
+    # way that physics moves it (own_values_outside)
+    own_values_outside: tuple[str, ...] = ()
 
     def form_bar(self, effects: tuple[str, ...]) -> float:
         """The best generic form's improvement that counts against ``effects``.
@@ -251,6 +258,7 @@ class Summary:
                 for k, v in document.get("air_beside", {}).items()
             },
             steady=bool(document.get("steady", True)),
+            own_values_outside=tuple(document.get("own_values_outside", ())),
         )
 
 
@@ -275,6 +283,7 @@ def summarise(
     even_left: dict[str, tuple[float, float, float]] | None = None,
     air_beside: dict[str, tuple[float, float]] | None = None,
     steady: bool = True,
+    own_values: tuple[str, ...] = (),
 ) -> Summary:
     """The decision's inputs from the fits.
 
@@ -282,7 +291,8 @@ def summarise(
     improvement (:mod:`.residual_forms`), the singles a signature they leave says are
     not alone (``even_left``: the even harmonics of ``p_b`` each single's fit leaves,
     :func:`unmade_signature`), and whether the recording is steady pulsing only
-    (:attr:`.dataset.Dataset.steady`).
+    (:attr:`.dataset.Dataset.steady`), and the effects whose own rig value the calibrated
+    baseline carries outside its tolerance (:func:`own_values_outside`).
     """
 
     def hypothesis(h: Fit) -> Hypothesis:
@@ -315,7 +325,28 @@ def summarise(
         form_gains=dict(form_gains or {}),
         air_beside=dict(air_beside or {}),
         steady=steady,
+        own_values_outside=own_values,
     )
+
+
+def own_values_outside(calibration: Calibration) -> tuple[str, ...]:
+    """Effects whose own rig value the calibration moved outside its tolerance their way.
+
+    ``Candidate.own_rig_values`` (a hose's wall stiffness, lower for a hose that swells
+    more) whose calibrated multiplier is outside the band the tolerances allow
+    (:func:`.rig_findings.outside`, as ``verdict.rig_values`` flags it) on that physics' side
+    of 1: the calibrated LTI model fits the recording by carrying that physics as a rig value.
+    """
+    found = []
+    for effect in CANDIDATES:
+        for name, sign in effect.own_rig_values:
+            m = calibration.multipliers.get(name, 1.0)
+            sigma = calibration.sigmas.get(name)
+            if sigma is None or m <= 0 or sign * np.log(m) <= 0:
+                continue
+            if outside(m, sigma, calibration.uncertainty.get(name, sigma)):
+                found.append(effect.name)
+    return tuple(dict.fromkeys(found))
 
 
 def ratio(reference: float, cost: float) -> float:

@@ -67,6 +67,12 @@ has no shape any candidate or generic form explains, so nothing is named, but th
 share of none weighs only the hypotheses fitted, and an effect weaker than the leftover (a
 weak hose beside a transducer's drifting zero) would not show."""
 
+AS_RIG_VALUE = "its physics carried by the calibrated model as a rig value outside its tolerance"
+"""The words of an effect named because the calibrated LTI model fits the recording only by
+moving that effect's own rig value outside its tolerance, its way (a hose wall far softer than
+the rig file's is a hose that swells more): no rule of the held-out cuts named it, so its
+confidence is said as a doubted verdict's."""
+
 
 @dataclass(frozen=True)
 class Verdict:
@@ -270,8 +276,18 @@ def decide_effects(summary: Summary) -> Verdict:
     ``STRUCTURED_RATIO`` times, or a hypothesis passed all but the generic form's bar (a
     real misfit the library does not identify), else none. While the baseline is within
     ``NOISE_EXCESS`` times the noise's share (:attr:`Summary.floor_cost`) only a weak single
-    that explains it all is named (:func:`weak_single`), else nothing.
+    that explains it all is named (:func:`weak_single`), else nothing. A none whose
+    calibrated model carries an effect's own rig value outside its tolerance, that effect's
+    way (:attr:`Summary.own_values_outside`), names that effect (:func:`as_rig_value`).
     """
+    verdict = _by_the_rules(summary)
+    if verdict.effects == () and summary.own_values_outside:
+        return as_rig_value(summary, summary.own_values_outside[0])
+    return verdict
+
+
+def _by_the_rules(summary: Summary) -> Verdict:
+    """:func:`decide_effects`' verdict of the held-out cuts."""
     if summary.excess_ratio < NOISE_EXCESS:
         weak = weak_single(summary)
         if weak is not None:
@@ -283,6 +299,15 @@ def decide_effects(summary: Summary) -> Verdict:
     if standing.chosen is not None:
         return _named(summary, standing, standing.chosen, cap)
     return _not_named(summary, standing, cap)
+
+
+def as_rig_value(summary: Summary, effect: str) -> Verdict:
+    """``effect`` named as the calibrated model carries it: its own rig value far off.
+
+    The improved model is the calibrated LTI model (``chosen`` None), which holds that value;
+    no physics check runs, as none of a candidate's fit (doubted: ``AS_RIG_VALUE``).
+    """
+    return _verdict(summary, (effect,), None, 0.0, AS_RIG_VALUE)
 
 
 @dataclass(frozen=True)

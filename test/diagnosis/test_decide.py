@@ -11,8 +11,11 @@ import pytest
 from brake_hil.analysis.signals import lowpass
 from brake_hil.diagnosis import diagnose as diagnosis
 from brake_hil.diagnosis import verdict as rules
+from brake_hil.diagnosis.calibration import Calibration
 from brake_hil.diagnosis.dataset import Dataset, Window
 from brake_hil.diagnosis.diagnose import Hypothesis, Summary, decide
+from brake_hil.diagnosis.summary import own_values_outside
+from brake_hil.physics.rig import Rig
 from brake_hil.topics import OUTPUT_CHANNELS
 
 BASE = 1.0e-5  # held-out cost of the baseline (NRMSE 0.3 %)
@@ -483,3 +486,38 @@ def test_a_pairs_member_values_are_read_as_a_singles() -> None:
     why = not_alone(fitted(-1.97e-3, -3.46e-3, -2.76e-3))
     assert why is not None and why.startswith("sensor_delay: its delays are a skew of p_b")
     assert not_alone(fitted(0.0, 0.0, 3.0e-3)) is None
+
+
+def test_an_effects_own_rig_value_far_off_names_that_effect(default_rig: Rig) -> None:
+    """A calibrated model that fits only with the hose wall far softer than its tolerance
+    allows carries a hose that swells more: hose_compliance is named, as that rig value,
+    its confidence said as a doubted one; a stiffer wall, or one within the band, is not."""
+    sigma = 0.43  # the hose wall's prior, widened by the bore's geometry
+
+    def calibrated(hose: float, posterior: float = 0.08) -> Calibration:
+        return Calibration(
+            default_rig,
+            {"hose_stiffness": hose},
+            {"hose_stiffness": sigma},
+            {"hose_stiffness": posterior},
+            0.0,
+        )
+
+    assert own_values_outside(calibrated(0.40)) == ("hose_compliance",)
+    assert own_values_outside(calibrated(2.5)) == ()  # a stiffer wall is no more hose
+    assert own_values_outside(calibrated(0.50)) == ()  # 1.6 sigmas: within the band
+    assert own_values_outside(calibrated(0.40, posterior=0.3)) == ()  # not sure of it
+    quiet = dataclasses.replace(
+        summary(single("hose_compliance", BASE / 1.8), single("sensor_delay", BASE / 1.5)),
+        noise_cost=BASE / 3,
+    )
+    assert decide(quiet).effects == ()
+    carried = dataclasses.replace(quiet, own_values_outside=("hose_compliance",))
+    verdict = decide(carried)
+    assert verdict.effects == ("hose_compliance",) and verdict.chosen is None
+    assert verdict.capped == rules.AS_RIG_VALUE and verdict.confidence < 0.5
+    replayed = Summary.from_dict(json.loads(json.dumps(carried.as_dict())))
+    assert decide(replayed) == verdict
+    named = dataclasses.replace(carried, noise_cost=BASE / 1000, baseline_window_costs=(BASE,) * 3)
+    strong = dataclasses.replace(named, singles=(single("orifice_flow", BASE / 50),))
+    assert decide(strong).effects == ("orifice_flow",)  # only a none is carried so
