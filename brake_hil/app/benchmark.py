@@ -13,8 +13,9 @@ the verdicts, and only then opens the labels to score them:
   physics is there and the advice says no bleeding); how often a null's verdict names
   a rig value far outside its tolerance;
 * ``unexplained`` recall on cases whose physics no candidate models;
-* ``out_of_tolerance`` found: no effect named and some ``verdict.rig_values[*].keys`` holds
-  the labelled key (a verdict without ``rig_values`` has not found it);
+* ``out_of_tolerance`` found: no effect named (or only the rig file's own air, said as the
+  rig file's, as on a null: these cases carry it too) and some ``verdict.rig_values[*].keys``
+  holds the labelled key (a verdict without ``rig_values`` has not found it);
 * ``more_air`` recall: ``verdict.air.state`` is ``more_than_rig_file``; and the same said of
   a null with the rig file's own air (a false alarm);
 * held-out RMS improvement on the mismatched channel (baseline / improved, the channel
@@ -263,13 +264,14 @@ def _rig_value_keys(result: CaseResult) -> set[str]:
 
 
 def _air_as_rig_file(result: CaseResult, label: Mapping[str, object]) -> bool:
-    """A null with the rig file's own air named that air, as the rig file's (no bleeding).
+    """A case with the rig file's own air (a null, an out-of-tolerance one) named it so.
 
-    The physics is there (the air's compliance follows the pressure, which the LTI model
-    linearises) and ``verdict.air`` says it is the rig file's: right, not a false positive.
+    Named alone, as the rig file's (no bleeding): the physics is there (the air's compliance
+    follows the pressure, which the LTI model linearises) and ``verdict.air`` says it is the
+    rig file's: right, not a false positive.
     """
     return (
-        label["kind"] == "null"
+        label["kind"] in ("null", "out_of_tolerance")
         and label.get("air") == "rig_file"
         and tuple(result.effects) == (AIR_EFFECT,)
         and _air_state(result) == AS_RIG_FILE
@@ -280,7 +282,8 @@ def is_right(result: CaseResult, label: Mapping[str, object]) -> bool:
     """Whether the verdict is right for the case's kind (see the module docstring)."""
     kind = label["kind"]
     if kind == "out_of_tolerance":
-        return not result.effects and str(label.get("key")) in _rig_value_keys(result)
+        alone = not result.effects or _air_as_rig_file(result, label)
+        return alone and str(label.get("key")) in _rig_value_keys(result)
     if kind == "more_air":
         return _air_state(result) == MORE_AIR
     if _air_as_rig_file(result, label):

@@ -98,7 +98,7 @@ def test_each_new_figure_is_scored_by_the_cases_kind() -> None:
     json.dumps(figures)  # JSON-ready
 
 
-def test_a_verdict_naming_a_far_value_is_right_only_without_an_effect() -> None:
+def test_a_far_value_is_right_beside_no_effect_but_the_rig_files_own_air() -> None:
     label = {"kind": "out_of_tolerance", "key": "hose.wall", "expected_effects": []}
     hose = [{"keys": HOSE_KEYS}]
     assert is_right(_result("0", (), 0.7, rig_values=hose), label)
@@ -106,6 +106,13 @@ def test_a_verdict_naming_a_far_value_is_right_only_without_an_effect() -> None:
     assert not is_right(_result("0", (), 0.7, rig_values=[{"keys": ["bore.length"]}]), label)
     assert not is_right(_result("0", (), 0.7, rig_values=None), label)
     assert not is_right(_result("0", (), 0.7, rig_values=[{"quantity": "x"}]), label)
+    # the rig file's own air, said as the rig file's, beside the far value: as on a null
+    as_file = {"state": "as_rig_file"}
+    air = {**label, "air": "rig_file"}
+    assert is_right(_result("0", ("entrained_air",), 0.7, rig_values=hose, air=as_file), air)
+    more = {"state": "more_than_rig_file"}
+    assert not is_right(_result("0", ("entrained_air",), 0.7, rig_values=hose, air=more), air)
+    assert not is_right(_result("0", ("entrained_air",), 0.7, rig_values=[], air=as_file), air)
 
 
 def test_labels_without_kinds_are_read_from_their_effects(tmp_path: Path) -> None:
