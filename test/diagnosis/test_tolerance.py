@@ -130,6 +130,26 @@ def test_the_air_as_the_rig_file_says_or_more() -> None:
     assert 1.3 < AIR_MORE_RATIO < 2.0
 
 
+def test_the_air_named_alone_is_read_as_the_calibrated_lti_model_fitted_it() -> None:
+    """Named alone, the air is the calibrated fraction (the rig file's own law and terms),
+    not the candidate's share said at the mean pressure; beside another effect, the
+    verdict's own model (the calibrated fraction would carry that effect too)."""
+    rig = load_rig(RIG_FILE)
+    calibration = _calibration(rig, {"air_fraction": 2.1})
+    share = 0.5 * rig.fluid.air_fraction * (1.0e6 + 1.013e5) ** 2 / (1.013e5 * 1.0e6)
+    fitted = {"calibration.air_fraction": 1.0, "air_share": share}  # reads 1.5 times
+    _, alone, words = for_verdict(calibration, fitted, ("entrained_air",), 1.0e6)
+    assert alone is not None and alone["ratio"] == pytest.approx(2.1)
+    assert alone["state"] == "more_than_rig_file" and "(2.1 times): bleed" in words
+    _, beside, _ = for_verdict(calibration, fitted, ("entrained_air", "hose_compliance"), 1.0e6)
+    assert beside is not None and beside["ratio"] == pytest.approx(1.5, rel=1e-3)
+    assert beside["state"] == "as_rig_file"
+    same = _calibration(rig, {"air_fraction": 1.3})
+    _, rig_files, words = for_verdict(same, fitted, ("entrained_air",), 1.0e6)
+    assert rig_files is not None and rig_files["state"] == "as_rig_file"
+    assert "bleed" not in words
+
+
 def test_the_air_is_said_the_same_way_where_it_is_read_back() -> None:
     for state, ratio in (("more_than_rig_file", 2.6), ("as_rig_file", 1.1)):
         text = air_text(state, ratio)
