@@ -291,10 +291,10 @@ def _as_rig_value(summary: Summary, verdict: Verdict, baseline_metrics: Metrics)
     worst_nrmse = max(m["nrmse"] for m in baseline_metrics.values())
     (effect,) = verdict.effects
     return (
-        f"{effect}: the calibrated LTI model fits the recording (NRMSE on the held-out cycles "
-        f"at most {worst_nrmse:.4f}, {noise_times(summary.excess_ratio)}) only with "
-        f"{effect}'s own rig value outside its tolerance, moved the way {effect} moves it "
-        "(the rig value below); the improved model is that calibrated model, which carries it."
+        f"{effect}: the calibrated LTI model reaches NRMSE at most {worst_nrmse:.4f} on the "
+        f"held-out cycles ({noise_times(summary.excess_ratio)}) only by moving {effect}'s own "
+        f"rig value outside its tolerance, the way {effect} moves it (the rig value below); "
+        "the improved model is that calibrated model, which carries it."
     )
 
 

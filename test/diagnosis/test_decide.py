@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from typing import Any, cast
 
 import numpy as np
 import pytest
@@ -14,6 +15,7 @@ from brake_hil.diagnosis import verdict as rules
 from brake_hil.diagnosis.calibration import Calibration
 from brake_hil.diagnosis.dataset import Dataset, Window
 from brake_hil.diagnosis.diagnose import Hypothesis, Summary, decide
+from brake_hil.diagnosis.result import explain
 from brake_hil.diagnosis.summary import own_values_outside
 from brake_hil.physics.rig import Rig
 from brake_hil.topics import OUTPUT_CHANNELS
@@ -521,3 +523,31 @@ def test_an_effects_own_rig_value_far_off_names_that_effect(default_rig: Rig) ->
     named = dataclasses.replace(carried, noise_cost=BASE / 1000, baseline_window_costs=(BASE,) * 3)
     strong = dataclasses.replace(named, singles=(single("orifice_flow", BASE / 50),))
     assert decide(strong).effects == ("orifice_flow",)  # only a none is carried so
+
+
+def test_an_effect_carried_as_its_rig_value_is_explained_as_that_value() -> None:
+    """Its words say what the calibrated model reached and at what rig value; its candidate's
+    set-aside fit (a different model of it) is not said against it, another's is."""
+    quiet = dataclasses.replace(
+        summary(single("hose_compliance", BASE / 1.8), single("sensor_delay", BASE / 1.5)),
+        noise_cost=BASE / 3,
+        own_values_outside=("hose_compliance",),
+        stand_ins={"hose_compliance": "a parameter error", "sensor_delay": "not a delay"},
+    )
+    verdict = decide(quiet)
+    assert verdict.capped == rules.AS_RIG_VALUE
+    metrics = {k: {"nrmse": 0.002} for k in OUTPUT_CHANNELS}
+    words = explain(
+        quiet,
+        verdict,
+        cast(Any, (None, None, None)),
+        cast(Any, None),
+        (metrics, metrics),
+        cast(Any, None),
+    )
+    assert words.startswith(
+        "hose_compliance: the calibrated LTI model reaches NRMSE at most 0.0020 on the held-out"
+    )
+    assert "only by moving hose_compliance's own rig value outside its tolerance" in words
+    assert "Set aside by a physics check, sensor_delay: not a delay" in words
+    assert "hose_compliance: a parameter error" not in words
