@@ -46,6 +46,7 @@ from brake_hil.diagnosis.rig_findings import air_beside, for_verdict
 from brake_hil.diagnosis.summary import (
     Hypothesis,
     Summary,
+    own_values_beside,
     own_values_outside,
     plausible,
     ratio,
@@ -390,6 +391,7 @@ def _decide_with_pairs(
             air,
             fits.dataset.steady,
             own_values_outside(fits.calibration),
+            own_values_beside(fits.calibration, fits.singles),
         )
 
     summary = summary_of(pairs)

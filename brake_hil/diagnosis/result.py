@@ -214,7 +214,7 @@ def explain(
     baseline, chosen, best = fits
     baseline_metrics, improved_metrics = metrics
     by_value = verdict.capped == AS_RIG_VALUE
-    if by_value:
+    if by_value and chosen is None:
         explanation = _as_rig_value(summary, verdict, baseline_metrics)
     elif chosen is None:
         explanation = _nothing_named(summary, verdict, baseline, best, baseline_metrics)
@@ -227,6 +227,8 @@ def explain(
                 f"{noise_times(chosen.held_out_cost / summary.noise_cost)} and no other "
                 "candidate cuts the error half as much."
             )
+        if by_value:
+            explanation += _beside_as_rig_value(verdict, chosen)
     if groove is not None and chosen is not None:
         explanation += f" Seal: {groove.verdict_words(chosen.effects)}"
     # a verdict carried as its rig value is not its candidate's fit, which a check may refuse
@@ -295,6 +297,16 @@ def _as_rig_value(summary: Summary, verdict: Verdict, baseline_metrics: Metrics)
         f"held-out cycles ({noise_times(summary.excess_ratio)}) only by moving {effect}'s own "
         f"rig value outside its tolerance, the way {effect} moves it (the rig value below); "
         "the improved model is that calibrated model, which carries it."
+    )
+
+
+def _beside_as_rig_value(verdict: Verdict, chosen: Fit) -> str:
+    """The words of the effect a named single's fit carries as its own rig value far off."""
+    beside = [e for e in verdict.effects if e not in chosen.effects]
+    return (
+        f" Beside it, {' and '.join(beside)}: {chosen.effects[0]}'s model fits the recording "
+        f"only by moving {beside[0]}'s own rig value outside its tolerance, the way "
+        f"{beside[0]} moves it (the rig value below), and carries it so."
     )
 
 

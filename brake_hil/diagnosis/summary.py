@@ -7,6 +7,7 @@ function of stored inputs and can be replayed.
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
@@ -25,6 +26,7 @@ __all__ = [
     "Hypothesis",
     "Summary",
     "not_alone",
+    "own_values_beside",
     "own_values_outside",
     "plausible",
     "ratio",
@@ -71,6 +73,8 @@ class Summary:
     # effects whose own rig value the calibrated baseline moved outside its tolerance, the
     # way that physics moves it (own_values_outside)
     own_values_outside: tuple[str, ...] = ()
+    # single -> the other effects whose own rig values its fit carries so (own_values_beside)
+    own_values_beside: dict[str, tuple[str, ...]] = field(default_factory=dict)
 
     def form_bar(self, effects: tuple[str, ...]) -> float:
         """The best generic form's improvement that counts against ``effects``.
@@ -259,6 +263,9 @@ class Summary:
             },
             steady=bool(document.get("steady", True)),
             own_values_outside=tuple(document.get("own_values_outside", ())),
+            own_values_beside={
+                str(k): tuple(v) for k, v in document.get("own_values_beside", {}).items()
+            },
         )
 
 
@@ -284,6 +291,7 @@ def summarise(
     air_beside: dict[str, tuple[float, float]] | None = None,
     steady: bool = True,
     own_values: tuple[str, ...] = (),
+    own_beside: dict[str, tuple[str, ...]] | None = None,
 ) -> Summary:
     """The decision's inputs from the fits.
 
@@ -292,7 +300,8 @@ def summarise(
     not alone (``even_left``: the even harmonics of ``p_b`` each single's fit leaves,
     :func:`unmade_signature`), and whether the recording is steady pulsing only
     (:attr:`.dataset.Dataset.steady`), and the effects whose own rig value the calibrated
-    baseline carries outside its tolerance (:func:`own_values_outside`).
+    baseline carries outside its tolerance (:func:`own_values_outside`), and beside each
+    single, those its fit carries so (:func:`own_values_beside`).
     """
 
     def hypothesis(h: Fit) -> Hypothesis:
@@ -326,27 +335,52 @@ def summarise(
         air_beside=dict(air_beside or {}),
         steady=steady,
         own_values_outside=own_values,
+        own_values_beside=dict(own_beside or {}),
     )
 
 
-def own_values_outside(calibration: Calibration) -> tuple[str, ...]:
-    """Effects whose own rig value the calibration moved outside its tolerance their way.
+def own_values_outside(
+    calibration: Calibration, parameters: Mapping[str, float] | None = None, named: str = ""
+) -> tuple[str, ...]:
+    """Effects whose own rig value a model moved outside its tolerance their way.
 
     ``Candidate.own_rig_values`` (a hose's wall stiffness, lower for a hose that swells
-    more) whose calibrated multiplier is outside the band the tolerances allow
+    more) whose multiplier is outside the band the tolerances allow
     (:func:`.rig_findings.outside`, as ``verdict.rig_values`` flags it) on that physics' side
-    of 1: the calibrated LTI model fits the recording by carrying that physics as a rig value.
+    of 1: the model fits the recording by carrying that physics as a rig value. The model is
+    the calibrated LTI one, or a hypothesis's fit (its ``parameters``: ``calibration.NAME``
+    multipliers), whose own effect ``named`` is left out.
     """
     found = []
     for effect in CANDIDATES:
         for name, sign in effect.own_rig_values:
             m = calibration.multipliers.get(name, 1.0)
+            if parameters is not None:
+                m = parameters.get(f"calibration.{name}", m)
             sigma = calibration.sigmas.get(name)
-            if sigma is None or m <= 0 or sign * np.log(m) <= 0:
+            if sigma is None or m <= 0 or sign * np.log(m) <= 0 or effect.name == named:
                 continue
             if outside(m, sigma, calibration.uncertainty.get(name, sigma)):
                 found.append(effect.name)
     return tuple(dict.fromkeys(found))
+
+
+def own_values_beside(
+    calibration: Calibration, singles: Sequence[Fit]
+) -> dict[str, tuple[str, ...]]:
+    """Each single whose fit carries other effects' own rig values outside their tolerance.
+
+    Those effects (:func:`own_values_outside` of the single's fit): the single's model fits the
+    recording by carrying a second physics as a rig value (bore friction named, the hose wall
+    at a third of the rig file's modulus).
+    """
+    found = {}
+    for single in singles:
+        name = single.effects[0]
+        beside = own_values_outside(calibration, single.parameters(), name)
+        if beside:
+            found[name] = beside
+    return found
 
 
 def ratio(reference: float, cost: float) -> float:

@@ -68,10 +68,8 @@ share of none weighs only the hypotheses fitted, and an effect weaker than the l
 weak hose beside a transducer's drifting zero) would not show."""
 
 AS_RIG_VALUE = "its physics carried by the calibrated model as a rig value outside its tolerance"
-"""The words of an effect named because the calibrated LTI model fits the recording only by
-moving that effect's own rig value outside its tolerance, its way (a hose wall far softer than
-the rig file's is a hose that swells more): no rule of the held-out cuts named it, so its
-confidence is said as a doubted verdict's."""
+"""The words of an effect named as its own rig value a model carries far off (a hose wall far
+softer than the rig file's): no held-out cut named it, so it is said as a doubted verdict."""
 
 
 @dataclass(frozen=True)
@@ -278,11 +276,15 @@ def decide_effects(summary: Summary) -> Verdict:
     ``NOISE_EXCESS`` times the noise's share (:attr:`Summary.floor_cost`) only a weak single
     that explains it all is named (:func:`weak_single`), else nothing. A none whose
     calibrated model carries an effect's own rig value outside its tolerance, that effect's
-    way (:attr:`Summary.own_values_outside`), names that effect (:func:`as_rig_value`).
+    way (:attr:`Summary.own_values_outside`), names that effect (:func:`as_rig_value`); a
+    single whose fit carries another effect's so (:attr:`Summary.own_values_beside`) is
+    named with it (:func:`with_rig_value`).
     """
     verdict = _by_the_rules(summary)
     if verdict.effects == () and summary.own_values_outside:
         return as_rig_value(summary, summary.own_values_outside[0])
+    if len(verdict.effects) == 1 and summary.own_values_beside.get(verdict.effects[0]):
+        return with_rig_value(summary, verdict)
     return verdict
 
 
@@ -302,12 +304,14 @@ def _by_the_rules(summary: Summary) -> Verdict:
 
 
 def as_rig_value(summary: Summary, effect: str) -> Verdict:
-    """``effect`` named as the calibrated model carries it: its own rig value far off.
-
-    The improved model is the calibrated LTI model (``chosen`` None), which holds that value;
-    no physics check runs, as none of a candidate's fit (doubted: ``AS_RIG_VALUE``).
-    """
+    """``effect`` as the calibrated model (improved, ``chosen`` None, unchecked) carries it."""
     return _verdict(summary, (effect,), None, 0.0, AS_RIG_VALUE)
+
+
+def with_rig_value(summary: Summary, single: Verdict) -> Verdict:
+    """``single`` and the effect its fit (still improved model, checked) carries far off."""
+    pair = (*single.effects, summary.own_values_beside[single.effects[0]][0])
+    return _verdict(summary, pair, single.chosen, min(single.margin, 0.0), AS_RIG_VALUE)
 
 
 @dataclass(frozen=True)

@@ -15,8 +15,9 @@ from brake_hil.diagnosis import verdict as rules
 from brake_hil.diagnosis.calibration import Calibration
 from brake_hil.diagnosis.dataset import Dataset, Window
 from brake_hil.diagnosis.diagnose import Hypothesis, Summary, decide
-from brake_hil.diagnosis.result import explain
-from brake_hil.diagnosis.summary import own_values_outside
+from brake_hil.diagnosis.fitting import Fit
+from brake_hil.diagnosis.result import _beside_as_rig_value, explain
+from brake_hil.diagnosis.summary import own_values_beside, own_values_outside
 from brake_hil.physics.rig import Rig
 from brake_hil.topics import OUTPUT_CHANNELS
 
@@ -551,3 +552,57 @@ def test_an_effect_carried_as_its_rig_value_is_explained_as_that_value() -> None
     assert "only by moving hose_compliance's own rig value outside its tolerance" in words
     assert "Set aside by a physics check, sensor_delay: not a delay" in words
     assert "hose_compliance: a parameter error" not in words
+
+
+def test_a_single_whose_fit_carries_another_effects_own_value_far_off_is_named_with_it() -> None:
+    """Bore friction named, its fit carrying the hose wall at a third of the rig file's: the
+    pair, doubted, the single's fit kept as the improved model and said with the hose."""
+    plain = summary(single("bore_friction", BASE / 50), single("thermal_drift", BASE))
+    assert decide(plain).effects == ("bore_friction",)
+    carried = dataclasses.replace(plain, own_values_beside={"bore_friction": ("hose_compliance",)})
+    verdict = decide(carried)
+    assert verdict.effects == ("bore_friction", "hose_compliance")
+    assert verdict.chosen == ("bore_friction",) and verdict.capped == rules.AS_RIG_VALUE
+    assert verdict.confidence < decide(plain).confidence
+    replayed = Summary.from_dict(json.loads(json.dumps(carried.as_dict())))
+    assert replayed == carried and decide(replayed) == verdict
+    elsewhere = dataclasses.replace(
+        plain, own_values_beside={"thermal_drift": ("hose_compliance",)}
+    )
+    assert decide(elsewhere).effects == ("bore_friction",)  # only the named single's fit counts
+
+
+def test_the_own_values_a_singles_fit_carries_are_read_off_its_parameters(
+    default_rig: Rig,
+) -> None:
+    """The hose wall at 0.35 in bore friction's fit is the hose's; in the hose's own fit, or
+    within its band, it is nothing; the words name both effects."""
+    calibration = Calibration(
+        default_rig,
+        {"hose_stiffness": 0.9},
+        {"hose_stiffness": 0.43},
+        {"hose_stiffness": 0.08},
+        0.0,
+    )
+
+    def fitted(name: str, wall: float) -> Fit:
+        return Fit(
+            (name,),
+            np.array([1.0, wall]),
+            ("x", "calibration.hose_stiffness"),
+            ("-", "x"),
+            BASE,
+            BASE,
+            {},
+        )
+
+    singles = [
+        fitted("bore_friction", 0.35),
+        fitted("hose_compliance", 0.35),
+        fitted("orifice_flow", 0.8),
+    ]
+    assert own_values_beside(calibration, singles) == {"bore_friction": ("hose_compliance",)}
+    verdict = rules.Verdict(("bore_friction", "hose_compliance"), 0.1, ("bore_friction",))
+    words = _beside_as_rig_value(verdict, singles[0])
+    assert words.startswith(" Beside it, hose_compliance: bore_friction's model fits")
+    assert "moving hose_compliance's own rig value outside its tolerance" in words
