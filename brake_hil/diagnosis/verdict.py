@@ -67,7 +67,7 @@ has no shape any candidate or generic form explains, so nothing is named, but th
 share of none weighs only the hypotheses fitted, and an effect weaker than the leftover (a
 weak hose beside a transducer's drifting zero) would not show."""
 
-AS_RIG_VALUE = "its physics carried by the calibrated model as a rig value outside its tolerance"
+AS_RIG_VALUE = "its physics carried by the fitted model as a rig value outside its tolerance"
 """The words of an effect named as its own rig value a model carries far off (a hose wall far
 softer than the rig file's): no held-out cut named it, so it is said as a doubted verdict."""
 
