@@ -152,17 +152,11 @@ def unfitted_pairs_matter(summary: Summary, verdict: Verdict) -> bool:
 
 
 def hypothesis_note(summary: Summary, effects: tuple[str, ...], verdict: Verdict) -> str:
-    """Why a hypothesis is or is not the verdict, in one line, by :func:`decide`'s own rules.
+    """Why hypothesis ``effects`` is or is not ``verdict``, in one line, by :func:`decide`'s rules.
 
-    Args:
-        summary: the decision's inputs.
-        effects: the hypothesis (a single or a pair).
-        verdict: what :func:`decide` made of ``summary``.
-
-    Returns:
-        One sentence: the verdict, or the first rule it fails (implausible values, the pair
-        rule, the acceptance ratio, a held-out window made worse, the generic form's bar, the
-        parameter penalty).
+    One sentence: the verdict, an effect of it carried as a rig value (``AS_RIG_VALUE``), or
+    the first rule it fails (implausible values, the pair rule, the acceptance ratio, a
+    held-out window made worse, the generic form's bar, the parameter penalty).
     """
     base = summary.baseline_cost
     known = {h.effects: h for h in (*summary.singles, *summary.pairs)}
@@ -176,6 +170,11 @@ def hypothesis_note(summary: Summary, effects: tuple[str, ...], verdict: Verdict
         return "not fitted"
     if verdict.chosen == effects:
         return "the verdict"
+    if verdict.capped == AS_RIG_VALUE and set(effects) <= set(verdict.effects):
+        return (
+            "named, as the fitted model carries it: its own rig value outside its tolerance "
+            "(this fit of it is not the improved model)"
+        )
     gain = ratio(base, h.held_out_cost)
     if summary.excess_ratio < NOISE_EXCESS:
         return (

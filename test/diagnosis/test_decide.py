@@ -521,6 +521,9 @@ def test_an_effects_own_rig_value_far_off_names_that_effect(default_rig: Rig) ->
     assert verdict.capped == rules.AS_RIG_VALUE and verdict.confidence < 0.5
     replayed = Summary.from_dict(json.loads(json.dumps(carried.as_dict())))
     assert decide(replayed) == verdict
+    row = diagnosis.hypothesis_note(carried, ("hose_compliance",), verdict)
+    assert row.startswith("named, as the fitted model carries it")  # the report's row
+    assert diagnosis.hypothesis_note(carried, ("sensor_delay",), verdict).startswith("not named")
     named = dataclasses.replace(carried, noise_cost=BASE / 1000, baseline_window_costs=(BASE,) * 3)
     strong = dataclasses.replace(named, singles=(single("orifice_flow", BASE / 50),))
     assert decide(strong).effects == ("orifice_flow",)  # only a none is carried so
@@ -557,13 +560,20 @@ def test_an_effect_carried_as_its_rig_value_is_explained_as_that_value() -> None
 def test_a_single_whose_fit_carries_another_effects_own_value_far_off_is_named_with_it() -> None:
     """Bore friction named, its fit carrying the hose wall at a third of the rig file's: the
     pair, doubted, the single's fit kept as the improved model and said with the hose."""
-    plain = summary(single("bore_friction", BASE / 50), single("thermal_drift", BASE))
+    plain = summary(
+        single("bore_friction", BASE / 50),
+        single("thermal_drift", BASE),
+        single("hose_compliance", BASE / 1.5),
+    )
     assert decide(plain).effects == ("bore_friction",)
     carried = dataclasses.replace(plain, own_values_beside={"bore_friction": ("hose_compliance",)})
     verdict = decide(carried)
     assert verdict.effects == ("bore_friction", "hose_compliance")
     assert verdict.chosen == ("bore_friction",) and verdict.capped == rules.AS_RIG_VALUE
     assert verdict.confidence < decide(plain).confidence
+    assert diagnosis.hypothesis_note(carried, ("bore_friction",), verdict) == "the verdict"
+    beside = diagnosis.hypothesis_note(carried, ("hose_compliance",), verdict)
+    assert beside.startswith("named, as the fitted model carries it")
     replayed = Summary.from_dict(json.loads(json.dumps(carried.as_dict())))
     assert replayed == carried and decide(replayed) == verdict
     elsewhere = dataclasses.replace(
