@@ -72,7 +72,6 @@ from brake_hil.diagnosis.thresholds import (
     WINDOW_FLOOR,
 )
 from brake_hil.diagnosis.verdict import (
-    AS_RIG_VALUE,
     Verdict,
     decide,
     fit_gain,
@@ -227,6 +226,7 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         improved.parameters(),
         verdict.effects,
         float(np.mean([w.mean_pressure for w in dataset.train])),
+        ground=verdict.by_rig_value,
     )
     explanation = _with_rig_values(explanation, words, verdict)
     explanation = _with_advice(explanation, verdict, dataset)
@@ -259,18 +259,10 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
 
 
 def _with_rig_values(explanation: str, words: str, verdict: Verdict) -> str:
-    """``explanation`` with the rig values' and the air's sentence (:func:`for_verdict`).
-
-    Before it when nothing is named; after it otherwise, as "also", but for the rig value a
-    verdict is carried as (``AS_RIG_VALUE``), which is its ground.
-    """
+    """``explanation`` and :func:`for_verdict`'s sentence: first when nothing is named."""
     if not words:
         return explanation
-    if not verdict.effects:
-        return f"{words} {explanation}"
-    if verdict.capped == AS_RIG_VALUE:
-        words = words.replace("Also a rig value", "A rig value", 1)
-    return f"{explanation} {words}"
+    return f"{explanation} {words}" if verdict.effects else f"{words} {explanation}"
 
 
 ADVICE_BELOW = 0.5

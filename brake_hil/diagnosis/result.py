@@ -23,13 +23,7 @@ from brake_hil.diagnosis.reliability import traits
 from brake_hil.diagnosis.residual_forms import ResidualDescription
 from brake_hil.diagnosis.summary import Summary
 from brake_hil.diagnosis.thresholds import NOISE_EXCESS
-from brake_hil.diagnosis.verdict import (
-    AS_RIG_VALUE,
-    Verdict,
-    confidence_text,
-    fit_gain,
-    fit_score,
-)
+from brake_hil.diagnosis.verdict import Verdict, confidence_text, fit_gain, fit_score
 from brake_hil.words import noise_times
 
 __all__ = ["Diagnosis", "explain"]
@@ -213,7 +207,7 @@ def explain(
     """
     baseline, chosen, best = fits
     baseline_metrics, improved_metrics = metrics
-    by_value = verdict.capped == AS_RIG_VALUE
+    by_value = verdict.by_rig_value
     if by_value and chosen is None:
         explanation = _as_rig_value(summary, verdict, baseline_metrics)
     elif chosen is None:

@@ -221,6 +221,7 @@ def for_verdict(
     parameters: Mapping[str, float],
     effects: tuple[str, ...],
     mean_pressure: float,
+    ground: bool = False,
 ) -> tuple[list[dict[str, object]], dict[str, object] | None, str]:
     """``verdict.rig_values``, ``verdict.air`` and the explanation's added sentence.
 
@@ -238,6 +239,7 @@ def for_verdict(
             candidates' own, e.g. ``air_share``).
         effects: the verdict's effects.
         mean_pressure: the recording's mean master-cylinder pressure (Pa).
+        ground: the rig values are the verdict's ground (it is named as one), not an "also".
     """
     multipliers = {
         name: parameters.get(f"calibration.{name}", value)
@@ -250,7 +252,7 @@ def for_verdict(
         share = parameters.get("air_share") if AIR_EFFECT in effects else None
         air = air_finding(calibration, multipliers, share, mean_pressure)
     words = []
-    if rig_values and effects == ():
+    if rig_values and (effects == () or ground):
         text = rig_values_text(rig_values)
         words.append(f"{text[0].upper()}{text[1:]}.")
     elif rig_values:

@@ -68,8 +68,7 @@ share of none weighs only the hypotheses fitted, and an effect weaker than the l
 weak hose beside a transducer's drifting zero) would not show."""
 
 AS_RIG_VALUE = "its physics carried by the fitted model as a rig value outside its tolerance"
-"""The words of an effect named as its own rig value a model carries far off (a hose wall far
-softer than the rig file's): no held-out cut named it, so it is said as a doubted verdict."""
+"""Words of an effect named as its own rig value a model carries far off: a doubted verdict."""
 
 
 @dataclass(frozen=True)
@@ -83,6 +82,11 @@ class Verdict:
     # Why a rule doubts the verdict, in words (its confidence counts it: reliability.py);
     # None when no rule does
     capped: str | None = None
+
+    @property
+    def by_rig_value(self) -> bool:
+        """Named as its own rig value a model carries far off (``AS_RIG_VALUE``)."""
+        return self.capped == AS_RIG_VALUE
 
     def confidence_text(self) -> str:
         """The confidence as printed: its number, and a rule's doubt in words."""
@@ -170,7 +174,7 @@ def hypothesis_note(summary: Summary, effects: tuple[str, ...], verdict: Verdict
         return "not fitted"
     if verdict.chosen == effects:
         return "the verdict"
-    if verdict.capped == AS_RIG_VALUE and set(effects) <= set(verdict.effects):
+    if verdict.by_rig_value and set(effects) <= set(verdict.effects):
         return (
             "named, as the fitted model carries it: its own rig value outside its tolerance "
             "(this fit of it is not the improved model)"
