@@ -72,7 +72,9 @@ the noise of the 30 Hz conditioned channels. Over whole cycles ``p_b``'s mean eq
 ``p_i``'s in every model (no flow at rest; the candidates' flows average to zero), so their
 mean difference within this bound is taken as the two zeros'; beyond it the rest stays in
 the residual (a zero shift, a leak). ``F_k`` and ``x_c`` keep their levels: a seal's rest
-position and the groove's creep show there."""
+position and the groove's creep show there; their transducers' zeros are taken to wander as
+much (a load cell's and a probe's thermal zero shift are of the same order), which a drift
+must be told from (``candidates.zero_wander``)."""
 NOISE_BAND_HZ = 150.0
 """The raw channels above this frequency hold noise alone (no segment kind reaches it): the
 estimate of the noise where nothing repeats (:func:`noise_variances`)."""

@@ -299,6 +299,7 @@ def make_context(calibration: Calibration, dataset: Dataset) -> Context:
         rig,
         flow_amplitude=flow,
         time_reference=float(np.mean([0.5 * (w.start + w.end) for w in dataset.train])),
+        last_time=float(max(w.end for w in (*dataset.train, *dataset.held_out))),
     )
 
 

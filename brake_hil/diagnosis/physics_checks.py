@@ -18,9 +18,10 @@ of the summary and is in the decision itself, for every hypothesis:
   delay).
 * **Rivals** (:func:`rival_check`): physics outside the library that this one may stand in
   for (``Candidate.rivals``: a delayed channel may be read through a resonant tap, a hose's lag
-  may be a late ``p_i``), fitted in its place with the calibration refitted, either does not
-  come out as its own physics (``Rival.holds``) or leaves ``Rival.told_apart`` times more
-  held-out error than the hypothesis.
+  may be a late ``p_i``, a drift may be the transducers' zeros moving), fitted in its place
+  with the calibration refitted, either does not come out as its own physics
+  (``Rival.holds``) or leaves ``Rival.told_apart`` times more held-out error than the
+  hypothesis.
 * **Wider priors** (:func:`prior_check`): with the calibration's priors ``PRIOR_WIDENING``
   times wider (the rig's values freer than its tolerances say), and ``FREED_WIDENING`` times
   wider for the values this recording cannot identify (the Fisher information of the

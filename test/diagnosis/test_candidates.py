@@ -179,3 +179,33 @@ def test_the_hose_wall_stores_the_same_at_every_operating_pressure(default_rig: 
     (node,) = [t for t in draft.terms if isinstance(t, HoseNode)]
     assert np.allclose(node.compliance, 0.8 * context.reference_compliance)
     assert np.allclose(node.creep_compliance, node.compliance)
+
+
+def test_the_thermal_drifts_rival_moves_the_force_and_displacement_zeros(
+    default_rig: Rig,
+) -> None:
+    """``zero_wander``, the rival of a thermal drift: F_k's and x_c's zeros move steadily from
+    the training data's middle to the fitted wander at the last sample; p_b and the dynamics
+    are unchanged. Its physics holds within the transducers' zero stability (0.1 % of full
+    scale: 8.9 N, 0.5 um), not beyond."""
+    from brake_hil.diagnosis.candidates.base import rig_context
+    from brake_hil.diagnosis.candidates.zero_wander import ZeroWander, stability
+
+    drift = candidate("thermal_drift")
+    (rival,) = drift.rivals(drift.start(_context(default_rig)))
+    assert isinstance(rival, ZeroWander)
+    assert stability("F_k") == pytest.approx(8.9) and stability("x_c") == pytest.approx(5e-7)
+    assert rival.holds(np.array([8.0, -4e-7])) and not rival.holds(np.array([12.0, 0.0]))
+    assert not rival.holds(np.array([0.0, 6e-7]))
+    context = rig_context(default_rig, flow_amplitude=2e-6, time_reference=4.0, last_time=14.0)
+    params = derive_parameters(default_rig, 1.08e6)
+    _, pressure = pulsing_profile((1.38e6,), ramp_s=0.5, pulsing_s=1.0)
+    still, moved = Draft([params]), Draft([params])
+    rival.fill(moved, np.array([[5.0, -2e-7]]), context)
+    start = np.array([9.0])  # the run's first sample at 9 s of the recording
+    plain = simulate_batch(still.spec(), pressure[::2], 2e-3, start_time=start)
+    shifted = simulate_batch(moved.spec(), pressure[::2], 2e-3, start_time=start)
+    since = 9.0 + 2e-3 * np.arange(plain.shape[-1]) - 4.0  # s from the reference
+    np.testing.assert_allclose(shifted[0, 0], plain[0, 0])
+    np.testing.assert_allclose(shifted[0, 1] - plain[0, 1], 5.0 * since / 10.0, atol=1e-9)
+    np.testing.assert_allclose(shifted[0, 2] - plain[0, 2], -2e-7 * since / 10.0, atol=1e-15)

@@ -63,10 +63,13 @@ class Context:
     time_reference: float  # s, middle of the training data (where drifts are zero)
     hose_resistance_share: float = 0.3  # -, R_t / (R_r + R_v + R_t): the hose's part of R
     reference_compliance: float = 5.0e-14  # m^3/Pa, C_b of the rig file at 0.9 MPa mean p_i
+    last_time: float = 0.0  # s, recording time of the last sample diagnosed
 
 
-def rig_context(rig: Rig, flow_amplitude: float, time_reference: float) -> Context:
-    """The Context of a rig (eqs. 2-3, 13, 20 of the paper) for a flow and time reference."""
+def rig_context(
+    rig: Rig, flow_amplitude: float, time_reference: float, last_time: float = 0.0
+) -> Context:
+    """The Context of a rig (eqs. 2-3, 13, 20 of the paper) for a flow and times (s)."""
     viscosity = rig.fluid.viscosity
     hose = line_resistance(rig.hose, viscosity)
     total = (
@@ -83,6 +86,7 @@ def rig_context(rig: Rig, flow_amplitude: float, time_reference: float) -> Conte
         time_reference=time_reference,
         hose_resistance_share=hose / total,
         reference_compliance=derive_parameters(rig).bore_compliance,
+        last_time=last_time,
     )
 
 

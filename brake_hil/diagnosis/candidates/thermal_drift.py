@@ -12,8 +12,10 @@ from brake_hil.diagnosis.candidates.base import (
     CandidateParameter,
     Context,
     Draft,
+    Rival,
 )
 from brake_hil.diagnosis.candidates.registry import register_candidate_class
+from brake_hil.diagnosis.candidates.zero_wander import ZeroWander
 from brake_hil.diagnosis.engine import Coupling, Entry, Term
 from brake_hil.physics.catalogue import CATALOGUE
 from brake_hil.types import FloatArray
@@ -90,6 +92,14 @@ class ThermalDrift(Candidate):
         draft.add(
             HeatingDrift(theta[:, 0].copy(), theta[:, 1].copy(), reference, theta[:, 2].copy())
         )
+
+    def rivals(self, theta: FloatArray) -> tuple[Rival, ...]:
+        """The force and displacement transducers' zeros moving within their stability.
+
+        A seal softening moves the mean ``F_k`` and ``x_c``, as a walking zero does; a drift
+        the recording shows only there is not told from the transducers.
+        """
+        return (ZeroWander(),)
 
     def consistent(self, evidence: dict[str, float]) -> bool:
         """The residual changes over the recording."""

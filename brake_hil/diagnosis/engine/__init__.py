@@ -12,7 +12,8 @@ parameter sets in one pass (one pass gives a whole finite-difference Jacobian):
   integrator), state updates after a step, and transforms of the outputs.
 * The mechanisms more than one effect uses are the engine's own (:mod:`.mechanisms`): a
   switching Jenkins friction element between piston and caliper, a per-channel delay; and,
-  for the physics checks' rivals, a channel read through a mode and every output led alike.
+  for the physics checks' rivals, a channel read through a mode, every output led alike and
+  the outputs' zeros wandering.
 
 A candidate of :mod:`brake_hil.diagnosis.candidates` contributes terms; the engine knows no
 effect names.
@@ -26,6 +27,7 @@ from brake_hil.diagnosis.engine.mechanisms import (
     ChannelReading,
     FrictionElement,
     LeadingOutputs,
+    WanderingZeros,
     tustin_mode,
 )
 from brake_hil.diagnosis.engine.plant import CALIPER_FORCE, LINE_DROP, RELATIVE_FORCE, Coupling
@@ -47,6 +49,7 @@ __all__ = [
     "State",
     "Step",
     "Term",
+    "WanderingZeros",
     "tustin_mode",
     "simulate_batch",
 ]

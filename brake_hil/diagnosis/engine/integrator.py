@@ -71,7 +71,9 @@ def _tables(
     return _Tables(phi, g_prev, g_now, g_w, plants[::per_set])
 
 
-def _simulate_linear(spec: ModelSpec, u: FloatArray, sample_time: float) -> FloatArray:
+def _simulate_linear(
+    spec: ModelSpec, u: FloatArray, sample_time: float, start_time: FloatArray
+) -> FloatArray:
     """Linear candidates through the vectorised modal simulation of the LTI model.
 
     ``u`` (Pa): one input for every set ``(N,)``, or one per set ``(B, N)``.
@@ -91,13 +93,15 @@ def _simulate_linear(spec: ModelSpec, u: FloatArray, sample_time: float) -> Floa
             output_names=("p_b", "F_k", "x_c"),
         )
         out[b] = simulate(model, u if u.ndim == 1 else u[b])
-    return _transform(spec, out, sample_time)
+    return _transform(spec, out, sample_time, start_time)
 
 
-def _transform(spec: ModelSpec, out: FloatArray, sample_time: float) -> FloatArray:
-    """The terms' output transforms, in order."""
+def _transform(
+    spec: ModelSpec, out: FloatArray, sample_time: float, start_time: FloatArray
+) -> FloatArray:
+    """The terms' output transforms, in order (``start_time`` (B,) s, each set's first)."""
     for term in spec.terms:
-        out = term.transform(out, sample_time)
+        out = term.transform(out, sample_time, start_time)
     return out
 
 
@@ -272,8 +276,9 @@ def simulate_batch(
     ``pressure_ceiling`` (Pa; default 1.2 times the input's maximum).
     """
     u = np.asarray(pressure, dtype=float)
+    starts = np.broadcast_to(np.asarray(start_time, dtype=float), (spec.batch,))
     if spec.is_linear:
-        return _simulate_linear(spec, u, sample_time)
+        return _simulate_linear(spec, u, sample_time, starts)
     ceiling = 1.2 * float(u.max()) if pressure_ceiling is None else pressure_ceiling
     samples = u.shape[-1]
     integrator = Integrator(
@@ -293,4 +298,4 @@ def simulate_batch(
         integrator.step(columns[k - 1], columns[k])
         states[k] = integrator.z
     out = np.einsum("boj,kbj->bok", integrator.out_c, states)
-    return _transform(spec, out, sample_time)
+    return _transform(spec, out, sample_time, starts)

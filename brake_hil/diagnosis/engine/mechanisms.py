@@ -140,7 +140,9 @@ class ChannelDelay(Term):
 
     linear = True
 
-    def transform(self, outputs: FloatArray, sample_time: float) -> FloatArray:
+    def transform(
+        self, outputs: FloatArray, sample_time: float, start_time: FloatArray
+    ) -> FloatArray:
         """Shift each channel by its delay."""
         time = np.arange(outputs.shape[-1]) * sample_time
         for b in range(outputs.shape[0]):
@@ -165,7 +167,9 @@ class ChannelReading(Term):
 
     linear = True
 
-    def transform(self, outputs: FloatArray, sample_time: float) -> FloatArray:
+    def transform(
+        self, outputs: FloatArray, sample_time: float, start_time: FloatArray
+    ) -> FloatArray:
         """Filter the channel of every set."""
         for b in range(outputs.shape[0]):
             numerator, _, denominator = tustin_mode(
@@ -215,7 +219,9 @@ class LeadingOutputs(Term):
 
     linear = True
 
-    def transform(self, outputs: FloatArray, sample_time: float) -> FloatArray:
+    def transform(
+        self, outputs: FloatArray, sample_time: float, start_time: FloatArray
+    ) -> FloatArray:
         """Advance and lead every channel of every set."""
         time = np.arange(outputs.shape[-1]) * sample_time
         for b in range(outputs.shape[0]):
@@ -223,3 +229,25 @@ class LeadingOutputs(Term):
                 early = np.interp(time + float(self.advance[b]), time, outputs[b, channel])
                 outputs[b, channel] = early + float(self.lead[b]) * np.gradient(early, sample_time)
         return outputs
+
+
+@dataclass(frozen=True, eq=False)
+class WanderingZeros(Term):
+    """Each output's zero moving at a steady rate: ``y(t) + r (t - t_0)``.
+
+    What a transducer whose zero walks during the recording reads; ``t`` is recording time,
+    ``t_0`` the time at which the zeros are the calibrated model's.
+    """
+
+    rates: FloatArray  # (B, 3) per channel: p_b Pa/s, F_k N/s, x_c m/s
+    reference: FloatArray  # (B,) t_0, s
+
+    linear = True
+
+    def transform(
+        self, outputs: FloatArray, sample_time: float, start_time: FloatArray
+    ) -> FloatArray:
+        """Add each set's moving zeros."""
+        time = np.arange(outputs.shape[-1]) * sample_time
+        since = np.asarray(start_time, dtype=float)[:, None] + time - self.reference[:, None]
+        return np.asarray(outputs + self.rates[:, :, None] * since[:, None, :])

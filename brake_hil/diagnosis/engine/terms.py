@@ -147,8 +147,13 @@ class Term:
         """This term's step for a run starting at equilibrium ``state`` (None: none)."""
         return None
 
-    def transform(self, outputs: FloatArray, sample_time: float) -> FloatArray:
-        """Change the outputs ``(B, 3, N)`` (p_b Pa, F_k N, x_c m) of a whole run."""
+    def transform(
+        self, outputs: FloatArray, sample_time: float, start_time: FloatArray
+    ) -> FloatArray:
+        """Change the outputs ``(B, 3, N)`` (p_b Pa, F_k N, x_c m) of a whole run.
+
+        ``start_time`` (B,): recording time (s) of each set's first sample.
+        """
         return outputs
 
     def merge(self: T, other: T) -> T:
