@@ -168,9 +168,11 @@ def main() -> int:
     checked = [c for cases in check_sets.values() for c in cases]
     if checked:
         table("check sets, pooled, shipped weights", scored(checked, None))
+        table("check sets, pooled, fitted weights", scored(checked, weights))
     for spec, cases in {**fit_sets, **check_sets}.items():
         role = "fit set" if spec in fit_sets else "check set"
         table(f"{spec} ({role}), shipped weights", scored(cases, None))
+        table(f"{spec} ({role}), fitted weights", scored(cases, weights))
     return 0
 
 
