@@ -427,7 +427,12 @@ def _check_physics(
         failed_before = [k.split("+") for k in checks if k != key]
         again = any(_holds_all(named.effects, tuple(k)) for k in failed_before)
         rounds += failed.name != "asymmetry" and not again
-        summary = replace(summary, stand_ins={**summary.stand_ins, key: failed.finding})
+        tied = {key: failed.stands_for} if failed.stands_for else {}
+        summary = replace(
+            summary,
+            stand_ins={**summary.stand_ins, key: failed.finding},
+            not_told_from={**summary.not_told_from, **tied},
+        )
         verdict = decide(summary)
     return summary, verdict, checks
 

@@ -116,6 +116,9 @@ class CheckOutcome:
     name: str  # asymmetry, channels, rivals, segments or wider_priors
     passed: bool
     finding: str
+    # a rival that explains as well and is a library effect's physics (Rival.stands_for),
+    # the hypothesis passing every other check: the two are not told apart
+    stands_for: str = ""
 
 
 def asymmetry_check(hypothesis: Fit, symmetric: Sequence[Fit] = ()) -> CheckOutcome | None:
@@ -257,6 +260,7 @@ def rival_check(model: Model, hypothesis: Fit) -> CheckOutcome:
                     f"{rival.in_words(values)} explains it as well: its held-out error is "
                     f"{apart:.2f} times {member.name}'s, which would have to be {lower}lower "
                     f"to tell them apart; {rival.why}",
+                    rival.stands_for,
                 )
             unlike = "" if holds else f", {rival.unlike}"
             told.append(
@@ -399,6 +403,8 @@ def check_hypothesis(
 ) -> list[CheckOutcome]:
     """The checks of ``hypothesis``, cheapest first, stopping at the first failure.
 
+    A rival that is a library effect's physics (``CheckOutcome.stands_for``) does not stop
+    them: the tie stands only when every other check passes, else it is a plain failure.
     ``symmetric``: the symmetric seals a groove is held against (:func:`asymmetry_check`).
     """
     asymmetry = asymmetry_check(hypothesis, symmetric)
@@ -408,8 +414,11 @@ def check_hypothesis(
     model = Model(calibration, [candidate(e) for e in hypothesis.effects], dataset)
     if outcomes[-1].passed:
         outcomes.append(rival_check(model, hypothesis))
-    if outcomes[-1].passed:
+    tie = outcomes[-1] if outcomes[-1].stands_for else None
+    if outcomes[-1].passed or tie is not None:
         outcomes.append(segment_check(model, hypothesis))
     if outcomes[-1].passed:
         outcomes.append(prior_check(calibration, dataset, hypothesis, required))
+    if tie is not None and not outcomes[-1].passed:
+        outcomes[outcomes.index(tie)] = replace(tie, stands_for="")
     return outcomes

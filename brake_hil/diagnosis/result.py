@@ -23,6 +23,7 @@ from brake_hil.diagnosis.reliability import traits
 from brake_hil.diagnosis.residual_forms import ResidualDescription
 from brake_hil.diagnosis.summary import Summary
 from brake_hil.diagnosis.thresholds import NOISE_EXCESS
+from brake_hil.diagnosis.ties import tied_with
 from brake_hil.diagnosis.verdict import Verdict, confidence_text, fit_gain, fit_score
 from brake_hil.words import noise_times
 
@@ -227,6 +228,12 @@ def explain(
         explanation += f" Seal: {groove.verdict_words(chosen.effects)}"
     # a verdict carried as its rig value is not its candidate's fit, which a check may refuse
     shown = {k: v for k, v in summary.stand_ins.items() if not (by_value and k in verdict.effects)}
+    tie = tied_with(summary, verdict)
+    if tie is not None and tie[1] in shown:
+        explanation += (
+            f" Not told apart from {tie[0]}: {shown.pop(tie[1])}; this recording does not "
+            "tell the two apart."
+        )
     if shown:
         first, finding = next(iter(shown.items()))
         others = [e.replace("+", " + ") for e in list(shown)[1:]]

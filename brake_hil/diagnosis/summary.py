@@ -61,6 +61,8 @@ class Summary:
     baseline_channel_rms: dict[str, float] = field(default_factory=dict)  # held-out
     pairs_ruled_out: tuple[tuple[str, ...], ...] = ()  # can never be named (unnameable_pairs)
     stand_ins: dict[str, str] = field(default_factory=dict)  # "a+b": the physics check failed
+    # "a+b" set aside only by a rival that is this library effect's physics (ties.py)
+    not_told_from: dict[str, str] = field(default_factory=dict)
     not_alone: dict[str, str] = field(default_factory=dict)  # "a" or "a+b": Candidate.not_alone
     # single: the even harmonics of p_b its fit leaves, share (%), z, power (unmade_signature)
     even_left: dict[str, tuple[float, float, float]] = field(default_factory=dict)
@@ -250,6 +252,7 @@ class Summary:
             baseline_channel_rms=dict(document.get("baseline_channel_rms", {})),
             pairs_ruled_out=tuple(tuple(p) for p in document.get("pairs_ruled_out", ())),
             stand_ins=dict(document.get("stand_ins", {})),
+            not_told_from=dict(document.get("not_told_from", {})),
             not_alone=dict(document.get("not_alone", {})),
             even_left={
                 str(k): (float(v[0]), float(v[1]), float(v[2]))

@@ -616,3 +616,37 @@ def test_the_own_values_a_singles_fit_carries_are_read_off_its_parameters(
     words = _beside_as_rig_value(verdict, singles[0])
     assert words.startswith(" Beside it, hose_compliance: bore_friction's model fits")
     assert "moving hose_compliance's own rig value outside its tolerance" in words
+
+
+def test_a_hose_a_late_input_ties_with_is_named_doubted_unless_the_delay_is() -> None:
+    """A strong hose set aside only by its late-``p_i`` rival (a ``sensor_delay`` with every
+    output leading) is not told from that delay: with the delay not namable (set aside
+    itself) the hose is named, doubted, not dropped for none; with the delay named, the delay
+    is doubted. Without the tie the hose is dropped (none) and the delay named undoubted."""
+    from brake_hil.diagnosis.ties import NOT_TOLD_APART, tied_with
+
+    hose, delay = single("hose_compliance", BASE / 40), single("sensor_delay", BASE / 25)
+    finding = "p_i acquired 0.9 ms late explains it as well"
+    tie = {"hose_compliance": "sensor_delay"}
+    both_aside = dataclasses.replace(
+        summary(hose, delay),
+        stand_ins={"hose_compliance": finding, "sensor_delay": "its skew differs"},
+    )
+    assert decide(both_aside).effects == ()
+    named = decide(dataclasses.replace(both_aside, not_told_from=tie))
+    assert named.effects == named.chosen == ("hose_compliance",)
+    assert named.capped == NOT_TOLD_APART and named.confidence < 0.5
+    tied = dataclasses.replace(both_aside, not_told_from=tie)
+    assert tied_with(tied, named) == ("sensor_delay", "hose_compliance")
+    delay_named = dataclasses.replace(summary(hose, delay), stand_ins={"hose_compliance": finding})
+    sure = decide(delay_named)
+    assert sure.effects == ("sensor_delay",) and sure.capped is None
+    doubted = decide(dataclasses.replace(delay_named, not_told_from=tie))
+    assert doubted.effects == ("sensor_delay",) and doubted.capped == NOT_TOLD_APART
+    assert doubted.confidence < sure.confidence
+    delay_tied = dataclasses.replace(delay_named, not_told_from=tie)
+    assert tied_with(delay_tied, doubted) == ("hose_compliance", "hose_compliance")
+    replayed = Summary.from_dict(
+        json.loads(json.dumps(dataclasses.replace(both_aside, not_told_from=tie).as_dict()))
+    )
+    assert decide(replayed) == named

@@ -233,6 +233,10 @@ class Rival(Candidate):
     """What the candidate's physics cannot do and the rival's does, in words."""
     unlike: ClassVar[str] = "not that physics"
     """What its fitted values say when they are not its physics (:meth:`holds`), in words."""
+    stands_for: ClassVar[str] = ""
+    """The library effect whose physics it is, as a special case (a late ``p_i`` is a
+    ``sensor_delay`` with every output leading); "" for physics outside the library. A
+    hypothesis it ties with is not told from that effect (:mod:`..ties`)."""
 
     def holds(self, theta: FloatArray) -> bool:
         """Whether its fitted own parameters ``theta`` describe the rival's physics."""

@@ -56,6 +56,7 @@ class LateInput(Rival):
     true hoses where it holds at all a late ``p_i`` leaves more than this (evidence in
     docs/diagnosis.md)."""
     why = "a hose adds lag to every output, it cannot make them lead"
+    stands_for = "sensor_delay"
     unlike = "too short a lead for a late input"
 
     def holds(self, theta: FloatArray) -> bool:
