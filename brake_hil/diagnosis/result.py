@@ -330,12 +330,21 @@ def _nothing_named(
             f"at most {worst_nrmse:.4f}, {noise_times(summary.excess_ratio)} (under "
             f"{math.sqrt(NOISE_EXCESS):.1f} times: nothing left to name)."
         )
-    return (
+    missed = (
         f"Nothing named: the calibrated LTI model misses the held-out cycles by NRMSE at most "
-        f"{worst_nrmse:.4f}, {noise_times(summary.excess_ratio)}, but what it leaves has no "
-        f"shape a candidate or a generic form explains (the best candidate, "
-        f"{best.effects[0]}, cuts the error only {fit_gain(baseline, best):.2f} times); an "
-        f"effect weaker than that leftover would not show."
+        f"{worst_nrmse:.4f}, {noise_times(summary.excess_ratio)}"
+    )
+    gain = fit_gain(baseline, best)
+    if "+".join(best.effects) in summary.stand_ins:
+        return (
+            f"{missed}; the candidate that cuts its error most, {best.effects[0]} ({gain:.2f} "
+            "times), was set aside by a physics check (below), and no other candidate or "
+            "generic form explains it."
+        )
+    return (
+        f"{missed}, but what it leaves has no shape a candidate or a generic form explains (the "
+        f"best candidate, {best.effects[0]}, cuts the error only {gain:.2f} times); an effect "
+        "weaker than that leftover would not show."
     )
 
 

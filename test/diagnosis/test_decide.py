@@ -650,3 +650,32 @@ def test_a_hose_a_late_input_ties_with_is_named_doubted_unless_the_delay_is() ->
         json.loads(json.dumps(dataclasses.replace(both_aside, not_told_from=tie).as_dict()))
     )
     assert decide(replayed) == named
+
+
+def test_a_none_whose_best_candidate_was_set_aside_says_so() -> None:
+    """A misfit far above the noise that the best candidate cuts 20 times, set aside by a
+    physics check: the words say it was set aside, not that it cut the error "only" 20 times
+    and that no candidate explains the misfit's shape."""
+    from brake_hil.diagnosis.fitting import Fit
+
+    aside = dataclasses.replace(
+        summary(single("hose_compliance", BASE / 20), single("thermal_drift", BASE / 1.1)),
+        stand_ins={"hose_compliance": "a late p_i explains it as well"},
+    )
+    verdict = decide(aside)
+    assert verdict.effects == ()
+
+    def fitted(effects: tuple[str, ...], cost: float) -> Fit:
+        return Fit(effects, np.ones(1), ("x",), ("-",), cost, cost, {})
+
+    metrics = {k: {"nrmse": 0.004} for k in OUTPUT_CHANNELS}
+    fits = (fitted((), BASE), None, fitted(("hose_compliance",), BASE / 20))
+    words = explain(
+        aside, verdict, cast(Any, fits), cast(Any, None), (metrics, metrics), cast(Any, None)
+    )
+    assert (
+        "the candidate that cuts its error most, hose_compliance (20.00 times), was set "
+        "aside by a physics check" in words
+    ), words
+    assert "only 20" not in words and "no shape" not in words
+    assert "Set aside by a physics check, hose_compliance: a late p_i explains it" in words
