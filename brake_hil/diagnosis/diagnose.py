@@ -227,9 +227,9 @@ def diagnose(recording: Recording, rig: Rig, progress: Progress | None = None) -
         verdict.effects,
         float(np.mean([w.mean_pressure for w in dataset.train])),
         ground=verdict.by_rig_value,
+        air_shown=summary.air_shows(verdict.effects),
     )
-    explanation = _with_rig_values(explanation, words, verdict)
-    explanation = _with_advice(explanation, verdict, dataset)
+    explanation = _with_advice(_with_rig_values(explanation, words, verdict), verdict, dataset)
     if verdict.effects != ("unexplained",):
         # the description is of the baseline's misfit, which the verdict explains or not
         residual = residual.reworded("the calibrated LTI baseline's misfit")

@@ -13,15 +13,20 @@ above only 1.4-1.8 sigmas (a +-10 % tolerance taken as a log-sigma): not found.
 The air (``verdict.air``): the air fraction the improved model carries (the calibrated
 fraction, plus the ``entrained_air`` candidate's pressure-following air expressed at the
 recording's mean pressure) against the rig file's. It is said whenever entrained_air is named,
-or the calibrated fraction is outside its tolerance: more than ``1 + tolerance`` times the rig
-file's (2 for the default 100 %) and surely (two posterior sigmas) above ``AIR_MORE_RATIO``
-times it (the bundled hose recording's calibration put 1.6 times the air beside the hose's
-own compliance; a 1.6 threshold alone called it more air). More than ``AIR_MORE_RATIO``
-times the rig file's is more air than it says: bleed the brake. Less is the rig file's own
-air, whose compliance follows the pressure within each cycle (the LTI model linearises it at
-the mean pressure, the paper's eq. 18); the improved model carries it. Beside another effect
-named, the air a pair with entrained air fits is said too when it is more than the rig file's
-and the pair explains a tenth of what the single leaves (:func:`air_beside`).
+or the calibrated fraction is outside its band as any rig value (:func:`outside`), or, where a
+pair with entrained air beside the single named cuts what it leaves (the air shows), outside
+its tolerance: more than ``1 + tolerance`` times the rig file's (2 for the default 100 %) and
+surely (two posterior sigmas) above ``AIR_MORE_RATIO`` times it (the bundled hose recording's
+calibration put 1.6 times the air beside the hose's own compliance; a 1.6 threshold alone
+called it more air). Where nothing shows the air, the calibrated fraction is one compliance
+among the calibrated values, and on fresh recordings whose air was the rig file's it reached
+2.0-2.6 times it beside a drift, a probe's play or a sensor's nonlinearity: "bleed" was false.
+More than ``AIR_MORE_RATIO`` times the rig file's is more air than it says: bleed the brake.
+Less is the rig file's own air, whose compliance follows the pressure within each cycle (the
+LTI model linearises it at the mean pressure, the paper's eq. 18); the improved model carries
+it. Beside another effect named, the air a pair with entrained air fits is said too when it is
+more than the rig file's and the pair explains a tenth of what the single leaves
+(:func:`air_beside`).
 """
 
 from __future__ import annotations
@@ -172,6 +177,7 @@ def air_finding(
     air_share: float | None,
     mean_pressure: float,
     named: bool = False,
+    shown: bool = False,
 ) -> dict[str, object] | None:
     """``verdict.air``, or None when the air needs no word.
 
@@ -181,6 +187,9 @@ def air_finding(
         air_share: the entrained_air candidate's fitted share at gauge zero, when it is named.
         mean_pressure: the recording's mean master-cylinder pressure (Pa).
         named: the air is named: a word is due whatever the fraction.
+        shown: a pair with entrained air beside the verdict's single cuts what it leaves
+            (:meth:`.summary.Summary.air_beside_words`): beyond ``1 + tolerance`` times the
+            rig file's the air is then said as more; else only beyond its band (:func:`outside`).
     """
     rig_fraction = calibration.rig.fluid.air_fraction
     m = multipliers.get("air_fraction", 1.0)
@@ -193,7 +202,8 @@ def air_finding(
         and (  # less air than the rig file's needs no word
             outside(m, sigma, posterior)
             or (
-                m > 1.0 + tolerance
+                shown
+                and m > 1.0 + tolerance
                 and float(np.log(m)) - POSTERIOR_SPAN * posterior > float(np.log(AIR_MORE_RATIO))
             )
         )
@@ -222,6 +232,7 @@ def for_verdict(
     effects: tuple[str, ...],
     mean_pressure: float,
     ground: bool = False,
+    air_shown: bool = False,
 ) -> tuple[list[dict[str, object]], dict[str, object] | None, str]:
     """``verdict.rig_values``, ``verdict.air`` and the explanation's added sentence.
 
@@ -240,6 +251,8 @@ def for_verdict(
         effects: the verdict's effects.
         mean_pressure: the recording's mean master-cylinder pressure (Pa).
         ground: the rig values are the verdict's ground (it is named as one), not an "also".
+        air_shown: a pair with entrained air beside the verdict's single cuts what it leaves
+            (:func:`air_finding`'s ``shown``).
     """
     multipliers = {
         name: parameters.get(f"calibration.{name}", value)
@@ -250,7 +263,7 @@ def for_verdict(
         air = air_finding(calibration, calibration.multipliers, None, mean_pressure, True)
     else:
         share = parameters.get("air_share") if AIR_EFFECT in effects else None
-        air = air_finding(calibration, multipliers, share, mean_pressure)
+        air = air_finding(calibration, multipliers, share, mean_pressure, shown=air_shown)
     words = []
     if rig_values and (effects == () or ground):
         text = rig_values_text(rig_values)

@@ -140,6 +140,10 @@ class Summary:
             "air than the rig file says is likely there too (bleed the brake and test again)"
         )
 
+    def air_shows(self, effects: tuple[str, ...]) -> bool:
+        """Single ``effects``'s pair with entrained air shows more air (``air_beside_words``)."""
+        return len(effects) == 1 and self.air_beside_words(effects[0]) is not None
+
     def unmade(self, name: str) -> str | None:
         """Why single ``name`` is likely not alone by even harmonics it leaves (or None)."""
         left = self.even_left.get(name)

@@ -123,7 +123,8 @@ def test_the_air_as_the_rig_file_says_or_more() -> None:
     assert more["state"] == "more_than_rig_file"
     assert more["text"] == "more air than the rig file says (2.0 times): bleed the brake"
     assert air_finding(calibration, {"air_fraction": 1.2}, None, 1.0e6) is None
-    calibrated = air_finding(calibration, {"air_fraction": 2.5}, None, 1.0e6)  # no candidate
+    # no candidate: past its tolerance where a pair with the air shows it
+    calibrated = air_finding(calibration, {"air_fraction": 2.5}, None, 1.0e6, shown=True)
     assert calibrated is not None and calibrated["state"] == "more_than_rig_file"
     assert air_finding(calibration, {"air_fraction": 1.7}, None, 1.0e6) is None  # in its band
     assert air_finding(calibration, {"air_fraction": 0.05}, None, 1.0e6) is None  # less air
@@ -240,3 +241,23 @@ def test_the_prior_steepens_beyond_two_tolerances() -> None:
     expected = [-edge - slope, -edge, -1.0, 0.0, 1.0, edge, edge, edge + slope]
     assert prior_residual(white) == pytest.approx(expected, abs=1e-6)
     assert slope > 1.0 and edge >= 1.0
+
+
+def test_the_air_beyond_its_tolerance_is_more_air_only_where_the_air_shows() -> None:
+    """A calibrated fraction 2.6 times the rig file's (its tolerance 100 %, its band about 8
+    times): beside a verdict whose pair with entrained air cuts what it leaves, more air,
+    bleed; where nothing shows the air (a none, a single whose pair with air explains no
+    more), the calibrated fraction is one compliance among the others and is not said."""
+    rig = load_rig(RIG_FILE)
+    calibration = _calibration(rig, {})
+    parameters = {"calibration.air_fraction": 2.6}
+    _, shown, words = for_verdict(
+        calibration, parameters, ("thermal_drift",), 1.0e6, air_shown=True
+    )
+    assert shown is not None and shown["state"] == "more_than_rig_file", shown
+    assert "bleed the brake" in words
+    for effects in ((), ("thermal_drift",)):
+        assert for_verdict(calibration, parameters, effects, 1.0e6) == ([], None, "")
+    far = {"calibration.air_fraction": 9.0}  # outside its band as any rig value
+    _, alone, _ = for_verdict(calibration, far, (), 1.0e6)
+    assert alone is not None and alone["state"] == "more_than_rig_file"
