@@ -228,7 +228,7 @@ def explain(
         explanation += f" Seal: {groove.verdict_words(chosen.effects)}"
     # a verdict carried as its rig value is not its candidate's fit, which a check may refuse
     shown = {k: v for k, v in summary.stand_ins.items() if not (by_value and k in verdict.effects)}
-    tie = tied_with(summary, verdict)
+    tie = tied_with(summary, verdict.effects, verdict.capped)
     if tie is not None and tie[1] in shown:
         explanation += (
             f" Not told apart from {tie[0]}: {shown.pop(tie[1])}; this recording does not "

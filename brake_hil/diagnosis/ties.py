@@ -40,15 +40,17 @@ def untie(summary: Summary, verdict: Verdict, rules: Callable[[Summary], Verdict
     return verdict
 
 
-def tied_with(summary: Summary, verdict: Verdict) -> tuple[str, str] | None:
-    """What a tie-doubted ``verdict`` is not told from, and the tied hypothesis's key.
+def tied_with(
+    summary: Summary, effects: tuple[str, ...], capped: str | None
+) -> tuple[str, str] | None:
+    """What a tie-doubted verdict (``effects``, ``capped``) is not told from, and the key.
 
     Named, the tied hypothesis is not told from its rival's effect; the rival's effect named,
-    from the tied hypothesis. None when no tie doubts ``verdict``.
+    from the tied hypothesis (its key, "a+b", is the second item). None when no tie doubts it.
     """
-    if verdict.capped != NOT_TOLD_APART:
+    if capped != NOT_TOLD_APART:
         return None
-    key = "+".join(verdict.effects)
+    key = "+".join(effects)
     if key in summary.not_told_from:
         return summary.not_told_from[key], key
     tied = [k for k, effect in summary.not_told_from.items() if effect == key]

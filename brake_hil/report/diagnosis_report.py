@@ -33,6 +33,7 @@ from brake_hil.diagnosis.diagnose import (
 from brake_hil.diagnosis.fitting import Fit
 from brake_hil.diagnosis.result import runner_up
 from brake_hil.diagnosis.rig_findings import rig_values_text
+from brake_hil.diagnosis.ties import tied_with
 from brake_hil.files import output_file
 from brake_hil.physics.calibrated_values import VALUE_LABELS
 from brake_hil.physics.catalogue import CATALOGUE, entry_text
@@ -295,6 +296,9 @@ def _rig_checks(diagnosis: Diagnosis, findings: list[Finding]) -> list[str]:
     if air is not None and "entrained_air" not in effects:
         checks.append(f"the air: {air['text']}")
     checks += [f"what else is there: {doubt}"] if doubt is not None else []
+    tie = tied_with(diagnosis.summary, effects, diagnosis.confidence_capped)
+    others = tie[0].split(" and ") if tie is not None else []
+    checks += [f"not told apart from it: {RIG_CHECKS[e]}" for e in others if e in RIG_CHECKS]
     named = {str(v["quantity"]) for v in diagnosis.rig_values}
     checks += [f"a rig value far outside its tolerance: {v['text']}" for v in diagnosis.rig_values]
     checks += [f.words for f in findings if f.name not in named]

@@ -637,7 +637,7 @@ def test_a_hose_a_late_input_ties_with_is_named_doubted_unless_the_delay_is() ->
     assert named.effects == named.chosen == ("hose_compliance",)
     assert named.capped == NOT_TOLD_APART and named.confidence < 0.5
     tied = dataclasses.replace(both_aside, not_told_from=tie)
-    assert tied_with(tied, named) == ("sensor_delay", "hose_compliance")
+    assert tied_with(tied, named.effects, named.capped) == ("sensor_delay", "hose_compliance")
     delay_named = dataclasses.replace(summary(hose, delay), stand_ins={"hose_compliance": finding})
     sure = decide(delay_named)
     assert sure.effects == ("sensor_delay",) and sure.capped is None
@@ -645,7 +645,8 @@ def test_a_hose_a_late_input_ties_with_is_named_doubted_unless_the_delay_is() ->
     assert doubted.effects == ("sensor_delay",) and doubted.capped == NOT_TOLD_APART
     assert doubted.confidence < sure.confidence
     delay_tied = dataclasses.replace(delay_named, not_told_from=tie)
-    assert tied_with(delay_tied, doubted) == ("hose_compliance", "hose_compliance")
+    tie = tied_with(delay_tied, doubted.effects, doubted.capped)
+    assert tie == ("hose_compliance", "hose_compliance")
     replayed = Summary.from_dict(
         json.loads(json.dumps(dataclasses.replace(both_aside, not_told_from=tie).as_dict()))
     )

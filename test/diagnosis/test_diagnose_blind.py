@@ -271,3 +271,30 @@ def test_a_subtle_second_effect_under_a_strong_one_leaves_the_verdict_unsure(
     assert verdict.get("possible_second_effect") == "entrained_air", verdict
     assert "with entrained_air beside it" in str(verdict["not_sure_alone"])
     assert "Not sure it is alone: with entrained_air beside it" in result.explanation
+
+
+def test_a_hose_a_late_input_ties_with_is_named_doubted_and_both_are_checked(
+    tmp_path: Path,
+) -> None:
+    """Family b's strong creeping hose, case 035 of seed 8402 (every rig value within its
+    tolerance): a late ``p_i`` fitted in the hose's place leaves 1.43 times its error, under
+    the 1.5 that tells them apart, and the delay itself fails its segments check. The hose
+    was dropped and the verdict none at 0.05; now it is named, doubted as not told apart
+    from ``sensor_delay``, and the report's checks name both the hose and the DAQ."""
+    from brake_hil.diagnosis.ties import NOT_TOLD_APART
+    from brake_hil.report.diagnosis_report import write_report
+    from brake_hil.virtual_rig.cases import make_case, plan_cases
+
+    spec = plan_cases(56, 8402, family="b")[35]
+    assert [e.name for e in spec.effects] == ["hose_compliance"]
+    make_case(spec, tmp_path, pulsing_s=5.0)
+    folder = tmp_path / spec.case_id
+    result = diagnose(read_recording(folder / "recording"), load_rig(folder / "rig.yaml"))
+    assert result.effects == ("hose_compliance",), result.explanation
+    assert result.confidence_capped == NOT_TOLD_APART and result.confidence < 0.5
+    assert result.summary.not_told_from == {"hose_compliance": "sensor_delay"}
+    assert "Not told apart from sensor_delay: p_i acquired" in result.explanation
+    page = write_report(result, tmp_path / "out").read_text()
+    checks = page[page.index("<b>What to check on the rig:</b>") :]
+    assert "the hose: its type, length and age" in checks
+    assert "not told apart from it: the DAQ channel of the late sensor" in checks
