@@ -645,8 +645,8 @@ def test_a_hose_a_late_input_ties_with_is_named_doubted_unless_the_delay_is() ->
     assert doubted.effects == ("sensor_delay",) and doubted.capped == NOT_TOLD_APART
     assert doubted.confidence < sure.confidence
     delay_tied = dataclasses.replace(delay_named, not_told_from=tie)
-    tie = tied_with(delay_tied, doubted.effects, doubted.capped)
-    assert tie == ("hose_compliance", "hose_compliance")
+    other = tied_with(delay_tied, doubted.effects, doubted.capped)
+    assert other == ("hose_compliance", "hose_compliance")
     replayed = Summary.from_dict(
         json.loads(json.dumps(dataclasses.replace(both_aside, not_told_from=tie).as_dict()))
     )
