@@ -353,31 +353,22 @@ def fit_from_both(model: Model) -> Fit:
     """``fit(model)`` from the calibrated values, and from the rig file's too when needed.
 
     The second start is taken when the calibration moved a value more than
-    ``RESTART_SIGMAS`` prior sigmas; a single's other starts (``Candidate.other_starts``)
-    are tried from the calibrated values. The best training fit is kept.
+    ``RESTART_SIGMAS`` prior sigmas; the better training fit is kept.
 
     Raises:
         FitError: as :func:`fit`, from the calibrated start.
     """
     fitted = fit(model)
-    starts = []
-    if len(model.candidates) == 1:
-        for own in model.candidates[0].other_starts(model.context):
-            start = model.start()
-            start[: model.effect_size] = own
-            starts.append(start)
     moved = model.calibration.prior_z()
-    if moved and max(abs(z) for z in moved.values()) > RESTART_SIGMAS:
-        start = model.start()
-        start[model.effect_size :] = 1.0
-        starts.append(start)
-    for start in starts:
-        try:
-            again = fit(model, start=start)
-        except FitError:
-            continue
-        fitted = again if again.train_cost < fitted.train_cost else fitted
-    return fitted
+    if not moved or max(abs(z) for z in moved.values()) <= RESTART_SIGMAS:
+        return fitted
+    start = model.start()
+    start[model.effect_size :] = 1.0
+    try:
+        again = fit(model, start=start)
+    except FitError:
+        return fitted
+    return again if again.train_cost < fitted.train_cost else fitted
 
 
 class _Search:
