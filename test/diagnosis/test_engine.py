@@ -190,7 +190,7 @@ def test_a_reading_through_a_mode_keeps_the_static_value_and_amplifies_below_it(
     signal = 2.0e6 + 1.0e6 * np.sin(2 * np.pi * 5.0 * time)
     outputs = np.stack([signal, signal, np.full_like(time, 3.0e-5)])[None].copy()
     reading = ChannelReading(0, np.array([f_n]), np.array([zeta]))
-    read = reading.transform(outputs.copy(), dt, np.zeros(1))
+    read = reading.transform(outputs.copy(), dt)
     np.testing.assert_array_equal(read[0, 1:], outputs[0, 1:])
     steady = time > 2.0  # the start-up ring decays within 5 / (zeta w) = 0.2 s
     response = 1.0 / (1.0 - (5.0 / f_n) ** 2 + 2j * zeta * 5.0 / f_n)
@@ -203,7 +203,7 @@ def test_a_reading_through_a_mode_keeps_the_static_value_and_amplifies_below_it(
     # lsim starts from rest at zero: compare once both rings have died out
     assert np.max(np.abs(read[0, 0, steady] - reference[steady])) < 2e-3 * np.ptp(signal)
     constant = np.full((1, 3, 500), 7.0)
-    np.testing.assert_allclose(reading.transform(constant, dt, np.zeros(1)), 7.0)
+    np.testing.assert_allclose(reading.transform(constant, dt), 7.0)
 
 
 def test_leading_every_output_undoes_an_input_acquired_late_through_its_filter() -> None:
@@ -221,17 +221,13 @@ def test_leading_every_output_undoes_an_input_acquired_late_through_its_filter()
     pole = np.exp(-dt / filter_time)
     read = scipy.signal.lfilter([1 - pole], [1, -pole], delayed, zi=[pole * delayed[0]])[0]
     outputs = np.stack([read, read, read])[None].copy()
-    led = LeadingOutputs(np.array([late]), np.array([filter_time])).transform(
-        outputs.copy(), dt, np.zeros(1)
-    )
+    led = LeadingOutputs(np.array([late]), np.array([filter_time])).transform(outputs.copy(), dt)
     inside = (time > 0.5) & (time < 2.9)  # the filter settled; the last 3 ms hold their value
     swing = np.ptp(on_time)
     assert np.max(np.abs(read[inside] - on_time[inside])) > 0.05 * swing
     for channel in range(3):
         assert np.max(np.abs(led[0, channel, inside] - on_time[inside])) < 0.01 * swing
-    advanced = LeadingOutputs(np.array([late]), np.array([0.0])).transform(
-        outputs.copy(), dt, np.zeros(1)
-    )
+    advanced = LeadingOutputs(np.array([late]), np.array([0.0])).transform(outputs.copy(), dt)
     assert np.max(np.abs(advanced[0, 0, inside] - on_time[inside])) > np.max(
         np.abs(led[0, 0, inside] - on_time[inside])
     )

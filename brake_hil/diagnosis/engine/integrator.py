@@ -101,7 +101,7 @@ def _transform(
 ) -> FloatArray:
     """The terms' output transforms, in order (``start_time`` (B,) s, each set's first)."""
     for term in spec.terms:
-        out = term.transform(out, sample_time, start_time)
+        out = term.transform_at(out, sample_time, start_time)
     return out
 
 

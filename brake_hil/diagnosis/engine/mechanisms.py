@@ -140,9 +140,7 @@ class ChannelDelay(Term):
 
     linear = True
 
-    def transform(
-        self, outputs: FloatArray, sample_time: float, start_time: FloatArray
-    ) -> FloatArray:
+    def transform(self, outputs: FloatArray, sample_time: float) -> FloatArray:
         """Shift each channel by its delay."""
         time = np.arange(outputs.shape[-1]) * sample_time
         for b in range(outputs.shape[0]):
@@ -167,9 +165,7 @@ class ChannelReading(Term):
 
     linear = True
 
-    def transform(
-        self, outputs: FloatArray, sample_time: float, start_time: FloatArray
-    ) -> FloatArray:
+    def transform(self, outputs: FloatArray, sample_time: float) -> FloatArray:
         """Filter the channel of every set."""
         for b in range(outputs.shape[0]):
             numerator, _, denominator = tustin_mode(
@@ -219,9 +215,7 @@ class LeadingOutputs(Term):
 
     linear = True
 
-    def transform(
-        self, outputs: FloatArray, sample_time: float, start_time: FloatArray
-    ) -> FloatArray:
+    def transform(self, outputs: FloatArray, sample_time: float) -> FloatArray:
         """Advance and lead every channel of every set."""
         time = np.arange(outputs.shape[-1]) * sample_time
         for b in range(outputs.shape[0]):
@@ -244,7 +238,7 @@ class WanderingZeros(Term):
 
     linear = True
 
-    def transform(
+    def transform_at(
         self, outputs: FloatArray, sample_time: float, start_time: FloatArray
     ) -> FloatArray:
         """Add each set's moving zeros."""

@@ -147,14 +147,19 @@ class Term:
         """This term's step for a run starting at equilibrium ``state`` (None: none)."""
         return None
 
-    def transform(
+    def transform(self, outputs: FloatArray, sample_time: float) -> FloatArray:
+        """Change the outputs ``(B, 3, N)`` (p_b Pa, F_k N, x_c m) of a whole run."""
+        return outputs
+
+    def transform_at(
         self, outputs: FloatArray, sample_time: float, start_time: FloatArray
     ) -> FloatArray:
-        """Change the outputs ``(B, 3, N)`` (p_b Pa, F_k N, x_c m) of a whole run.
+        """:meth:`transform` of a run whose sets start at recording times ``start_time`` (B,) s.
 
-        ``start_time`` (B,): recording time (s) of each set's first sample.
+        The engine calls this one; a term whose change of the outputs depends on the
+        recording time overrides it, the others :meth:`transform`.
         """
-        return outputs
+        return self.transform(outputs, sample_time)
 
     def merge(self: T, other: T) -> T:
         """This term joined with ``other`` of the same kind (two effects, one mechanism).
