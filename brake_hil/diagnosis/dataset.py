@@ -306,6 +306,15 @@ def split(segments: list[Window]) -> tuple[tuple[Window, ...], tuple[Window, ...
     return tuple(train), tuple(held_out)
 
 
+def zero_stability(channel: str) -> float:
+    """How far (the channel's units) its transducer's zero may wander in a recording.
+
+    ``ZERO_STABILITY`` of the channel's full scale (:data:`SENSORS`).
+    """
+    sensor = SENSORS[channel]
+    return ZERO_STABILITY * (sensor.high - sensor.low)
+
+
 def read_as_measured(
     predicted: FloatArray, measured: FloatArray, window: Window, channel: str
 ) -> FloatArray:
@@ -318,8 +327,7 @@ def read_as_measured(
     """
     if window.kind not in ZERO_LEVELLED_KINDS or measured.size == 0 or channel != "p_b":
         return predicted
-    sensor = SENSORS[channel]
-    bound = ZERO_STABILITY * (sensor.high - sensor.low)
+    bound = zero_stability(channel)
     offset = np.clip(np.mean(measured - predicted, axis=-1, keepdims=True), -bound, bound)
     return np.asarray(predicted + offset, dtype=float)
 

@@ -13,11 +13,10 @@ from __future__ import annotations
 import numpy as np
 
 from brake_hil.diagnosis.candidates.base import CandidateParameter, Context, Draft, Rival
-from brake_hil.diagnosis.dataset import ZERO_STABILITY
+from brake_hil.diagnosis.dataset import zero_stability as stability
 from brake_hil.diagnosis.engine import WanderingZeros
 from brake_hil.diagnosis.thresholds import CLEAR_ACCEPT_RATIO
 from brake_hil.physics.catalogue import EffectEntry, Quantity
-from brake_hil.physics.measurement import SENSORS
 from brake_hil.types import FloatArray
 
 WANDERING = ("F_k", "x_c")
@@ -26,12 +25,6 @@ read on the measured one already, ``dataset.read_as_measured``)."""
 SEARCHED_STABILITIES = 5.0
 """Its wander is searched up to this many times the zero's stability, so that a wander beyond
 the stability comes out as such (and is not a transducer's) instead of at the bound."""
-
-
-def stability(channel: str) -> float:
-    """How far (channel's units) its transducer's zero may wander in a recording."""
-    sensor = SENSORS[channel]
-    return ZERO_STABILITY * (sensor.high - sensor.low)
 
 
 ZERO_WANDER = EffectEntry(
