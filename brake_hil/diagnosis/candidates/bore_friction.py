@@ -16,7 +16,8 @@ from brake_hil.physics.catalogue import CATALOGUE
 from brake_hil.types import FloatArray
 
 CONTACT_STIFFNESS = 5.0e7
-"""Tangential stiffness of the piston-bore contact before it slides (N/m)."""
+"""Tangential stiffness of the piston-bore contact before it slides (N/m), of a model file
+written before the candidate fitted it."""
 
 
 @register_candidate_class
@@ -25,13 +26,29 @@ class BoreFriction(Candidate):
 
     As the caliper rotates by ``x_c / l_c`` the bore wall pushes on the piston with a normal
     force ``2 N_b = 4 A_eb p_b |x_c| / l_c``; sliding against it costs Coulomb friction
-    ``F_fb = mu_fb 4 A_eb p_b |x_c| / l_c`` (eq. 8). Modelled as a stiff contact spring in
-    series with a slider whose threshold follows that force, in parallel with the seal.
+    ``F_fb = mu_fb 4 A_eb p_b |x_c| / l_c`` (eq. 8). Modelled as a contact spring in series
+    with a slider whose threshold follows that force, in parallel with the seal.
+
+    Fitted: the coefficient, ``mu_fb`` times ``l_c`` over the arm the cocking couple acts on
+    (the paper takes ``l_c``, 10 cm; over a piston's guide of a few millimetres the bore
+    presses some 30 times harder, so up to 30), and the contact's tangential stiffness before
+    it slides (pre-sliding: a Dahl contact's, 1e6-1e11 N/m; a rigid one at the top).
     """
 
     entry = CATALOGUE["bore_friction"]
     even_harmonics = True  # its friction grows with the pressure on the seal
-    parameters = (CandidateParameter("bore_friction_coefficient", "-", 0.0, 3.0, 0.2),)
+    parameters = (
+        CandidateParameter("bore_friction_coefficient", "-", 0.0, 30.0, 0.2),
+        CandidateParameter(
+            "contact_stiffness",
+            "N/m",
+            1.0e6,
+            1.0e11,
+            1.0e9,
+            logarithmic=True,
+            absent=CONTACT_STIFFNESS,
+        ),
+    )
 
     def fill(self, draft: Draft, theta: FloatArray, context: Context) -> None:
         """A slider whose threshold is mu 4 A_eb p_b |x_c| / l_c.
@@ -41,7 +58,7 @@ class BoreFriction(Candidate):
         bore_area = np.array([p.bore_area for p in draft.params])
         draft.add(
             FrictionElement(
-                spring=np.full(draft.batch, CONTACT_STIFFNESS),
+                spring=theta[:, 1].copy(),
                 apply_threshold=np.zeros(draft.batch),
                 release_threshold=np.zeros(draft.batch),
                 bore_friction=4.0 * theta[:, 0] * bore_area / context.transducer_distance,
