@@ -353,22 +353,31 @@ def fit_from_both(model: Model) -> Fit:
     """``fit(model)`` from the calibrated values, and from the rig file's too when needed.
 
     The second start is taken when the calibration moved a value more than
-    ``RESTART_SIGMAS`` prior sigmas; the better training fit is kept.
+    ``RESTART_SIGMAS`` prior sigmas; a single's other starts (``Candidate.other_starts``)
+    are tried from the calibrated values. The best training fit is kept.
 
     Raises:
         FitError: as :func:`fit`, from the calibrated start.
     """
     fitted = fit(model)
+    starts = []
+    if len(model.candidates) == 1:
+        for own in model.candidates[0].other_starts(model.context):
+            start = model.start()
+            start[: model.effect_size] = own
+            starts.append(start)
     moved = model.calibration.prior_z()
-    if not moved or max(abs(z) for z in moved.values()) <= RESTART_SIGMAS:
-        return fitted
-    start = model.start()
-    start[model.effect_size :] = 1.0
-    try:
-        again = fit(model, start=start)
-    except FitError:
-        return fitted
-    return again if again.train_cost < fitted.train_cost else fitted
+    if moved and max(abs(z) for z in moved.values()) > RESTART_SIGMAS:
+        start = model.start()
+        start[model.effect_size :] = 1.0
+        starts.append(start)
+    for start in starts:
+        try:
+            again = fit(model, start=start)
+        except FitError:
+            continue
+        fitted = again if again.train_cost < fitted.train_cost else fitted
+    return fitted
 
 
 class _Search:
@@ -470,6 +479,11 @@ def _step(x: FloatArray, j: int, size: float, upper: FloatArray) -> FloatArray:
 
 INDEPENDENT_SAMPLES_PER_SECOND = 60.0
 """Independent samples per second and channel of a 30 Hz low-passed signal (Nyquist)."""
+RANGE_SIGMA_SHARE = 12.0**-0.5
+"""A candidate's own parameter is no more uncertain than a uniform draw over its search range
+(0.29 of the range, in the search's units): the fit's information adds to that, so a value
+the recording does not identify (a slider beside no friction) keeps its range's sigma and
+does not spread its null direction onto the values it does identify."""
 
 
 def _uncertainty(
@@ -480,14 +494,19 @@ def _uncertainty(
     The Jacobian is of residuals scaled by ``MODEL_ERROR``; the misfit actually left is
     ``cost`` (mean squared), and the residual samples are correlated (30 Hz low-pass), so
     the count that sets the covariance is the independent one, about 60 per second and
-    channel.
+    channel. The candidates' own parameters are bounded by their search range
+    (``RANGE_SIGMA_SHARE``).
     """
     span = sum(min(w.end - w.start, FIT_SPAN if w.capped else np.inf) for w in model.dataset.train)
     independent = max(INDEPENDENT_SAMPLES_PER_SECOND * span * len(OUTPUT_CHANNELS), 2.0)
     inflation = max(cost / MODEL_ERROR**2, 1e-6) * max(samples / independent, 1.0)
+    specs = model.parameters()[: model.effect_size]
+    width = np.array([np.log(hi / lo) if log else hi - lo for _, _, lo, hi, log in specs])
+    bounded = np.zeros(jac.shape[1])
+    bounded[: width.size] = inflation / (RANGE_SIGMA_SHARE * np.maximum(width, 1e-300)) ** 2
     try:
         with np.errstate(over="ignore", invalid="ignore"):  # a Jacobian of NOT_FINITE_RESIDUAL
-            covariance = np.linalg.inv(jac.T @ jac) * inflation
+            covariance = np.linalg.inv(jac.T @ jac + np.diag(bounded)) * inflation
     except np.linalg.LinAlgError:
         return None
     if not np.all(np.isfinite(covariance)):

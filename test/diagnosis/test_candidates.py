@@ -61,6 +61,10 @@ def test_candidate_contract(candidate: Candidate, default_rig: Rig) -> None:
         assert parameter.low <= value <= parameter.high, parameter.name
         assert parameter.unit
         assert parameter.low < parameter.high
+    for other in candidate.other_starts(context):
+        assert other.shape == start.shape and not np.array_equal(other, start)
+        for value, parameter in zip(other, candidate.parameters):
+            assert parameter.low <= value <= parameter.high, parameter.name
     params = derive_parameters(default_rig, 1.08e6)
     draft = Draft([params, params])
     theta = np.vstack([start, np.array([p.high for p in candidate.parameters])])

@@ -214,6 +214,14 @@ class Candidate:
         """Start values of the parameters (may use the rig's derived quantities)."""
         return np.array([p.start for p in self.parameters])
 
+    def other_starts(self, context: Context) -> tuple[FloatArray, ...]:
+        """Start values beside :meth:`start` a fit of this candidate alone also tries.
+
+        For a law whose fit can slide from its start to a degenerate corner (the better
+        training fit is kept, :func:`..fitting.fit_from_both`). Default: none.
+        """
+        return ()
+
     @classmethod
     def describe(cls) -> str:
         """The physical description: the class docstring's first paragraphs, one line."""
