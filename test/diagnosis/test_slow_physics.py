@@ -9,11 +9,25 @@ import pytest
 from brake_hil.diagnosis.calibration import calibrate
 from brake_hil.diagnosis.candidates import candidate
 from brake_hil.diagnosis.dataset import prepare
-from brake_hil.diagnosis.fitting import PREROLL, Model, fit
+from brake_hil.diagnosis.fitting import PREROLL, Fit, Model, fit
 from brake_hil.physics.rig import Rig
 from brake_hil.virtual_rig import make_effect, seed_pulsing, simulate_rig
+from brake_hil.virtual_rig.effects.base import Effect
 
 RELAXATION_TIME = 1.0  # s, the virtual rig's seat creep (family a's default)
+
+
+def _baseline_and_fit(rig: Rig, effect: Effect, name: str, seed: int) -> tuple[Fit, Fit]:
+    """The calibrated baseline and candidate ``name`` fitted on the virtual rig with ``effect``
+    (the seed's three 5 s pulsing segments)."""
+    run = simulate_rig(
+        rig, [effect], seed_pulsing((1.38e6, 2.07e6, 2.76e6), pulsing_s=5.0), seed=seed
+    )
+    dataset = prepare(run.as_recording(), rig)
+    calibration = calibrate(dataset, rig)
+    return fit(Model(calibration, [], dataset)), fit(
+        Model(calibration, [candidate(name)], dataset)
+    )
 
 
 def test_a_creeping_seat_is_fitted_with_its_own_creep_time(default_rig: Rig) -> None:
@@ -42,13 +56,7 @@ def test_a_rig_that_heats_up_is_fitted_with_its_heating_time(default_rig: Rig) -
     from brake_hil.diagnosis.candidates.thermal_drift import LINEAR, heated_time
 
     heating = make_effect("thermal_drift", 1.0, time_constant=15.0)
-    run = simulate_rig(
-        default_rig, [heating], seed_pulsing((1.38e6, 2.07e6, 2.76e6), pulsing_s=5.0), seed=4
-    )
-    dataset = prepare(run.as_recording(), default_rig)
-    calibration = calibrate(dataset, default_rig)
-    baseline = fit(Model(calibration, [], dataset))
-    drift = fit(Model(calibration, [candidate("thermal_drift")], dataset))
+    baseline, drift = _baseline_and_fit(default_rig, heating, "thermal_drift", seed=4)
     fitted = drift.parameters()
     assert fitted["heating_time"] == pytest.approx(15.0, rel=0.3)
     assert fitted["line_drift_rate"] < 0 and fitted["seal_drift_rate"] < 0  # it softens
@@ -101,13 +109,7 @@ def test_a_short_cocking_arm_is_fitted_as_strong_bore_friction(default_rig: Rig)
     from brake_hil.diagnosis.candidates.bore_friction import CONTACT_STIFFNESS
 
     friction = make_effect("bore_friction", 0.8)
-    run = simulate_rig(
-        default_rig, [friction], seed_pulsing((1.38e6, 2.07e6, 2.76e6), pulsing_s=5.0), seed=5
-    )
-    dataset = prepare(run.as_recording(), default_rig)
-    calibration = calibrate(dataset, default_rig)
-    baseline = fit(Model(calibration, [], dataset))
-    fitted = fit(Model(calibration, [candidate("bore_friction")], dataset))
+    baseline, fitted = _baseline_and_fit(default_rig, friction, "bore_friction", seed=5)
     values = fitted.parameters()
     assert values["bore_friction_coefficient"] > 3.0
     assert values["contact_stiffness"] > CONTACT_STIFFNESS
